@@ -167,7 +167,8 @@ def test_pnlss_warns_when_its_linear_part_is_unstable():
     u, y = d[:800, :1] - d[:800, :1].mean(0), d[:800, 1:2] - d[:800, 1:2].mean(0)
     with pytest.warns(sysid.StabilityWarning, match=r"linear part is unstable \(largest pole "
                       r"modulus 1\.00"):  # this flexible arm at order 2
-        m = sysid.pnlss(sysid.IOData(u=u, y=y), 2, degree=2, max_iter=200)
+        # every search direction allowed: the fit this scenario was found with
+        m = sysid.pnlss(sysid.IOData(u=u, y=y), 2, degree=2, max_iter=200, significance=0)
     assert m.info["unstable_linear_part"] >= 1.0
     lin = m.linear()
     m.info.pop("unstable_linear_part")
@@ -245,3 +246,29 @@ def test_default_start_is_the_ssest_fit_a_user_gets(monkeypatch):
     assert len(calls) == 1 and calls[0]["focus"] == "simulation"
     cap = inspect.signature(real).parameters["max_iter"].default
     assert calls[0].get("max_iter", cap) == cap
+
+
+def test_significance_leaves_unsupported_directions_out_of_the_search():
+    """pnlss's search steps only along directions whose own predicted decrease reaches
+    ``significance`` residual variances: with a bar no direction reaches, the search stops
+    at its linear start (statistical convergence); without the bar (0) it moves."""
+    truth = _truth()
+    rng = np.random.default_rng(3)
+    d = _data(truth, 2)
+    d = sysid.IOData(d.u, d.y + 0.05 * rng.standard_normal(d.y.shape), d.dt)
+    kw = dict(degree=3, terms="full", output_terms="none", periods=2, progress=False,
+              max_iter=20)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", sysid.IterationLimitWarning)
+        free = sysid.pnlss(d, 2, significance=0, **kw)
+        barred = sysid.pnlss(d, 2, significance=1e12, **kw)
+        default = sysid.pnlss(d, 2, **kw)
+    assert barred.info["fit"]["stop"] == "statistical convergence"
+    assert barred.info["fit"]["iterations"] == 0
+    assert np.all(barred.E == 0) and free.info["fit"]["iterations"] > 0
+    assert np.any(free.E != 0)
+    assert default.info["significance"] == 1.0 and free.info["significance"] == 0.0
+    for m in (free, default):  # both fit the record better than the start
+        assert m.info["fit"]["cost"][-1] < 0.9 * m.info["fit"]["cost"][0]
+    with pytest.raises(DataError):
+        sysid.pnlss(d, 2, significance=-1, **kw)

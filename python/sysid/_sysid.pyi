@@ -696,6 +696,7 @@ def pnlss_estimate(
     fixed: list[bool] | None = None,
     progress: Callable[..., Any] | None = None,
     iterates: bool = False,
+    significance: float = 0.0,
 ) -> dict[str, Any]: ...
 def pnlss_estimate_weighted(
     structure: _PolyStructure,

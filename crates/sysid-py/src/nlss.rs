@@ -176,7 +176,7 @@ pub fn pnlss_simulate<'py>(
 /// `(u, y, skip)`. Returns a dict with the optimiser's report and `theta`; with
 /// `iterates=True` also `iterates`, the point of every iteration (one row each, in order).
 #[pyfunction]
-#[pyo3(signature = (structure, records, theta0, max_iter=100, tol=1e-8, fixed=None, progress=None, iterates=false))]
+#[pyo3(signature = (structure, records, theta0, max_iter=100, tol=1e-8, fixed=None, progress=None, iterates=false, significance=0.0))]
 #[allow(clippy::too_many_arguments)]
 pub fn pnlss_estimate<'py>(
     py: Python<'py>,
@@ -188,12 +188,14 @@ pub fn pnlss_estimate<'py>(
     fixed: Option<Vec<bool>>,
     progress: Option<Py<PyAny>>,
     iterates: bool,
+    significance: f64,
 ) -> PyResult<Bound<'py, PyDict>> {
     let m = structure.model()?;
     let data = records_data(&records)?;
     let th0 = crate::convert::vec1(&theta0);
     let mut opts = fit_options(max_iter, tol);
     opts.fixed = fixed;
+    opts.significance = significance;
     let mut kept = Vec::new();
     let sol = run(py, &progress, |obs| {
         m.estimate(&data, &th0, &opts, &mut keeping(obs, iterates, &mut kept))

@@ -172,13 +172,14 @@ class DecoupledPNLSSModel(LinearPart, ModelMixin):
 
 def fit_decoupled(lin: StateSpaceModel, us: list[np.ndarray], recs: list[tuple[Any, ...]],
                   degrees: list[int], branches: int, clamp: bool, max_iter: int, tol: float,
-                  progress: Any, seed: int = 0,
-                  weights: Any = None) -> tuple[Callable[[np.ndarray], dict[str, Any]],
-                                                dict[str, Any]]:
+                  progress: Any, seed: int = 0, weights: Any = None,
+                  significance: float = 0.0) -> tuple[Callable[[np.ndarray], dict[str, Any]],
+                                                      dict[str, Any]]:
     """The decoupled fit from the linear start ``lin`` (scaled channels): branch directions
     drawn at random (seeded) and scaled to unit variance on the linear start's ``[x; u]``,
     ``W = 0`` (each start is the linear model); ``STARTS`` short fits, the best continued;
-    ``weights`` (lines and weights, :mod:`sysid.nlss.freqweight`): the frequency-weighted cost.
+    ``weights`` (lines and weights, :mod:`sysid.nlss.freqweight`): the frequency-weighted cost;
+    ``significance``: the time-domain search's (``_sysid.pnlss_estimate``).
     Returns the model's keyword arguments (without scaling and names) as a function of the
     parameters (the result's or any of the report's ``iterates``: the best start's path, then
     its continuation's, one row per entry of ``history``) and the optimiser's report."""
@@ -207,7 +208,8 @@ def fit_decoupled(lin: StateSpaceModel, us: list[np.ndarray], recs: list[tuple[A
     def fit(th0: np.ndarray, it: int) -> dict[str, Any]:
         if weights is None:
             return _sysid.pnlss_estimate(struct, recs, th0, max_iter=it, tol=tol,
-                                         progress=progress, iterates=True)
+                                         progress=progress, iterates=True,
+                                         significance=significance)
         return _sysid.pnlss_estimate_weighted(struct, recs, weights, th0, max_iter=it, tol=tol,
                                               progress=progress, iterates=True)
 

@@ -278,6 +278,16 @@ pub struct Options {
     /// one-step fit of the initial states: they stay empty and the step costs one
     /// evaluation less).
     pub final_gauss_newton: bool,
+    /// Steps only where the data support them: in the eigenbasis of the scaled Gauss-Newton
+    /// matrix, a direction whose own Gauss-Newton decrease `(v_k^T g)^2 / (2 lam_k)` is below
+    /// `significance * sigma^2` (`sigma^2 = 2 cost / n`, [`Problem::n_residuals`]) is left out
+    /// of the step and of the predicted decrease: its component's estimate is smaller than
+    /// `sqrt(2 significance)` of its own standard deviation. `1` is the Akaike criterion's
+    /// price of a parameter (a direction is taken when it lowers `sum r^2 / sigma^2` by more
+    /// than 2). Needs the eigendecomposition (problems above `eigen_limit` free parameters
+    /// use it too when this is on) and a provider that counts its residuals. Default `0`
+    /// (off).
+    pub significance: f64,
 }
 
 impl Default for Options {
@@ -298,6 +308,7 @@ impl Default for Options {
             eigen_limit: 400,
             geodesic: false,
             final_gauss_newton: true,
+            significance: 0.0,
         }
     }
 }

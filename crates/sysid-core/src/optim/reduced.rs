@@ -40,6 +40,9 @@ pub(super) struct Reduced {
     /// The scaled orthonormal basis of the invariant directions at `at`, once a chord step
     /// asked for it (every chord step from this matrix removes the same directions).
     pub orbit: Option<Mat<f64>>,
+    /// The decrease (cost units) below which an eigendirection is left out of the steps
+    /// ([`Options::significance`]; 0: none is).
+    pub gate: f64,
 }
 
 /// Smallest damping (relative to the largest eigenvalue) of a Cholesky solve: the similarity
@@ -55,7 +58,8 @@ pub(super) fn reduce(
 ) -> Result<Reduced> {
     let p = pt.theta.len();
     let n_free = blocked.iter().filter(|&&b| !b).count();
-    if n_free > opt.eigen_limit {
+    let gate = significance_gate(&*problem, opt, pt);
+    if n_free > opt.eigen_limit && gate == 0.0 {
         return Ok(reduce_cholesky(pt, blocked));
     }
     let t0 = std::time::Instant::now();
@@ -152,9 +156,21 @@ pub(super) fn reduce(
         blocked: blocked.to_vec(),
         at: pt.theta.clone(),
         orbit: None,
+        gate,
     };
     red.set_gradient(&pt.g);
     Ok(red)
+}
+
+/// [`Options::significance`] in cost units at `pt` (0 when off or the residuals are not
+/// counted).
+fn significance_gate(problem: &dyn Problem, opt: &Options, pt: &Point) -> f64 {
+    match problem.n_residuals() {
+        Some(n) if opt.significance > 0.0 && pt.raw.cost.is_finite() => {
+            opt.significance * 2.0 * pt.raw.cost / n.max(1) as f64
+        }
+        _ => 0.0,
+    }
 }
 
 /// The large-problem form of [`reduce`]: no basis and no eigendecomposition.
@@ -199,6 +215,7 @@ fn reduce_cholesky(pt: &Point, blocked: &[bool]) -> Reduced {
         blocked: blocked.to_vec(),
         at: pt.theta.clone(),
         orbit: None,
+        gate: 0.0,
     };
     red.set_gradient(&pt.g);
     prof("reduce-cholesky", t0);
@@ -316,6 +333,21 @@ impl Reduced {
         vec![0.0; p]
     }
 
+    /// The eigendirections a step may take: those whose own Gauss-Newton decrease along the
+    /// gradient `gs` reaches [`Self::gate`] (all when it is 0).
+    fn kept(&self, v: &Mat<f64>, lam: &[f64]) -> Vec<bool> {
+        let q = lam.len();
+        if self.gate <= 0.0 {
+            return vec![true; q];
+        }
+        (0..q)
+            .map(|k| {
+                let proj: f64 = (0..q).map(|i| v[(i, k)] * self.gs[i]).sum();
+                lam[k] > 0.0 && 0.5 * proj * proj / lam[k] >= self.gate
+            })
+            .collect()
+    }
+
     /// Full-space step for damping `mu` (relative to the largest eigenvalue); `mu = 0` gives the
     /// Gauss-Newton step through the pseudo-inverse.
     pub(super) fn step(&self, mu: f64, rank_tol: f64) -> Vec<f64> {
@@ -338,11 +370,12 @@ impl Reduced {
             .copied()
             .fold(0.0, f64::max)
             .max(f64::MIN_POSITIVE);
+        let kept = self.kept(v, lam);
         let mut c = vec![0.0; q];
         for k in 0..q {
             let proj: f64 = (0..q).map(|i| v[(i, k)] * gs[i]).sum();
             let den = lam[k] + mu * lmax;
-            if lam[k] > rank_tol * lmax || mu > 0.0 {
+            if kept[k] && (lam[k] > rank_tol * lmax || mu > 0.0) {
                 c[k] = -proj / den;
             }
         }
@@ -380,9 +413,10 @@ impl Reduced {
         };
         let q = lam.len();
         let lmax = lam.iter().copied().fold(0.0, f64::max);
+        let kept = self.kept(v, lam);
         let mut s = 0.0;
         for k in 0..q {
-            if lam[k] > rank_tol * lmax && lam[k] > 0.0 {
+            if kept[k] && lam[k] > rank_tol * lmax && lam[k] > 0.0 {
                 let proj: f64 = (0..q).map(|i| v[(i, k)] * self.gs[i]).sum();
                 s += proj * proj / lam[k];
             }

@@ -365,6 +365,11 @@ pub fn minimize(
             _ => (red.gn_decrease(options.rank_tol), true),
         };
         prof("gn-decrease", t0);
+        if red.gate > 0.0 && dec < red.gate && pt.cost > f64::MIN_POSITIVE {
+            // no direction's decrease reaches `Options::significance` residual variances
+            stop = StopReason::Statistical;
+            break;
+        }
         if pt.cost <= f64::MIN_POSITIVE || dec <= options.tol_gradient * pt.cost {
             stop = StopReason::GradientTolerance;
             break;

@@ -701,3 +701,60 @@ fn a_capped_search_reports_how_far_it_stands_from_its_minimum() {
     let uncounted = go(&mut ls(2, rosen), &[-1.2, 1.0], &o);
     assert!(uncounted.remaining_decrease.is_nan());
 }
+
+/// `Ls` counting its residuals (for the tests that need the residual variance).
+struct Counted<F: FnMut(&[f64]) -> (Vec<f64>, Vec<Vec<f64>>)>(Ls<F>, usize);
+
+impl<F: FnMut(&[f64]) -> (Vec<f64>, Vec<Vec<f64>>)> Problem for Counted<F> {
+    fn n_params(&self) -> usize {
+        self.0.n_params()
+    }
+    fn evaluate(&mut self, th: &[f64], jac: bool) -> crate::Result<Evaluation> {
+        self.0.evaluate(th, jac)
+    }
+    fn n_residuals(&self) -> Option<usize> {
+        Some(self.1)
+    }
+}
+
+#[test]
+fn significance_leaves_unsupported_directions_out_of_the_step() {
+    // y = 1 + e: a level the data determine, and an alternating term (orthogonal to it) whose
+    // least-squares coefficient is far inside its own standard deviation
+    let n = 100;
+    let e: Vec<f64> = (0..n).map(|k| (0.7 * k as f64).sin()).collect();
+    let f = move |t: &[f64]| {
+        let r = (0..n)
+            .map(|k| t[0] + t[1] * if k % 2 == 0 { 1.0 } else { -1.0 } - 1.0 - e[k])
+            .collect();
+        let j = (0..n)
+            .map(|k| vec![1.0, if k % 2 == 0 { 1.0 } else { -1.0 }])
+            .collect();
+        (r, j)
+    };
+    let fit = |significance: f64, eigen_limit: usize| {
+        let mut o = Options::default();
+        o.significance = significance;
+        o.eigen_limit = eigen_limit;
+        o.max_iter = 20;
+        go(&mut Counted(ls(2, f.clone()), n), &[0.0, 0.0], &o).theta
+    };
+    let (ls_a, ls_b) = (fit(0.0, 400)[0], fit(0.0, 400)[1]);
+    assert!(
+        ls_b.abs() > 1e-4,
+        "the alternating coefficient is not zero by itself: {ls_b}"
+    );
+    for limit in [400, 0] {
+        let t = fit(1.0, limit);
+        // the level moves from 0 to within its own standard deviation (0.07) of its
+        // least-squares value (the search stops once no direction is worth one variance)
+        assert!(
+            (t[0] - ls_a).abs() < 0.05,
+            "the level is still fitted: {t:?} ({ls_a})"
+        );
+        assert_eq!(
+            t[1], 0.0,
+            "the unsupported coefficient stays at its start: {t:?}"
+        );
+    }
+}
