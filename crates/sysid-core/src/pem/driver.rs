@@ -426,60 +426,41 @@ fn pem_from(
     finish(prob, solution, losses)
 }
 
-/// At most this many multiply-adds (`N l p^2`) for the exact Gauss-Newton matrix of
-/// [`suspect`]'s cases (a few seconds).
+/// At most this many multiply-adds (`N l p^2`) for the Gauss-Newton matrix at the end of a
+/// search formed from every Jacobian row in `theta` (a few seconds).
 const EXACT_ROWS_BUDGET: f64 = 2e10;
 
-/// The outputs' mean square over the errors' (`y^T Lambda^-1 y` averaged over samples and
-/// outputs) beyond which the structured Gauss-Newton matrix loses too many digits: the map
-/// to `theta` cancels columns of the outputs' size into ones of the errors' size, so about
-/// `log10` of this ratio of its 16 digits (an unstable model's growing state: 1e18 and
-/// more; a good fit of a clean record: 1e2 to 1e4).
+/// An output's mean square over its error variance beyond which the end of a search weighs
+/// by the error covariance itself and forms its Gauss-Newton matrix from every row. The
+/// structured matrix is formed in the predictor parameters and mapped to `theta`
+/// (`normal::matrix_to_theta`), which cancels columns of the outputs' size into ones of the
+/// errors' size after squaring them: about `log10` of this ratio of its 16 digits go (an
+/// unstable model's growing state: 1e18 and more; a good fit of a clean record: 1e2 to 1e4).
+/// Beyond it, too, the search's weighting floor ([`Predictor::reweight_at`]) exceeds 1e-6 of
+/// the error variance, and every standard deviation would carry it (by 7e4 on a record whose
+/// output grew by 1.03^800).
 const OUTPUT_SHARE: f64 = 1e6;
 
-/// Whether the structured Gauss-Newton matrix `h` at the end of a search is to be formed
-/// again from every Jacobian row in `theta` (within [`EXACT_ROWS_BUDGET`], and where the
-/// similarity orbit is the whole of `K`'s too: `K` estimated or zero): the outputs exceed
-/// the errors by more than [`OUTPUT_SHARE`], its rank test did not find the `p - n^2`
-/// directions the orbit leaves, or it has a diagonal entry that is not positive (which
-/// `J^T W J` cannot have).
-fn suspect(prob: &Predictor<'_>, h: &Mat<f64>, rank: usize, lam: &Mat<f64>) -> bool {
-    let (n, p) = (prob.n, prob.p);
-    // (the reference path already formed every row)
-    let rows_already = !(prob.structured && prob.col_lo == 0);
-    if n == 0 || h.nrows() != p || rows_already || !(prob.est_k || prob.k_fixed.norm_max() == 0.0) {
-        return false;
-    }
+/// Whether the Gauss-Newton matrix at the end of a search may be formed from every row: the
+/// structured path formed it (the reference path forms every row already), the similarity
+/// orbit is the whole of `K`'s too (`K` estimated or zero), within [`EXACT_ROWS_BUDGET`].
+fn rows_allowed(prob: &Predictor<'_>) -> bool {
+    let p = prob.p;
     let work = (prob.n_samples * prob.l) as f64 * (p * p) as f64;
-    if work > EXACT_ROWS_BUDGET {
-        return false;
-    }
-    rank != p.saturating_sub(n * n)
-        || (0..p).any(|i| h[(i, i)] <= 0.0)
-        || output_share(prob, lam) > OUTPUT_SHARE
+    prob.n > 0
+        && prob.structured
+        && prob.col_lo == 0
+        && (prob.est_k || prob.k_fixed.norm_max() == 0.0)
+        && work <= EXACT_ROWS_BUDGET
 }
 
-/// `sum_t y_t^T Lambda^-1 y_t / (N l)` over every experiment (0 when `Lambda` is singular:
-/// noise-free data, whose covariance nobody reads).
-fn output_share(prob: &Predictor<'_>, lam: &Mat<f64>) -> f64 {
-    let l = prob.l;
-    if lam.nrows() != l || l == 0 {
-        return 0.0;
-    }
-    let Ok(fac) = lam.llt(faer::Side::Lower) else {
-        return 0.0;
-    };
-    let w = faer::linalg::solvers::Solve::solve(&fac, Mat::<f64>::identity(l, l)); // Lambda^-1
-    let mut total = 0.0;
-    for (_, y) in &prob.exps {
-        for t in 0..y.nrows() {
-            for i in 0..l {
-                let wy: f64 = (0..l).map(|j| w[(i, j)] * y[(t, j)]).sum();
-                total += y[(t, i)] * wy;
-            }
-        }
-    }
-    total / (prob.n_samples.max(1) * l) as f64
+/// The Gauss-Newton matrix at `theta` from every Jacobian row in `theta`.
+fn exact_rows(prob: &mut Predictor<'_>, theta: &[f64]) -> Result<Mat<f64>> {
+    let lo = prob.col_lo;
+    prob.col_lo = 0;
+    let ev = prob.evaluate_rows(theta);
+    prob.col_lo = lo;
+    Ok(ev?.gauss_newton)
 }
 
 /// `first` followed by `second` (started at `first`'s end): one report of both searches.
@@ -506,9 +487,17 @@ fn finish(
     let theta = solution.theta.clone();
     let pm = prob.unpack(&theta);
     let lam = prob.innovation_covariance(&theta);
-    let h = if prob.weight_unfloored(&lam) {
+    let rows = rows_allowed(&prob);
+    // outputs many orders above their errors: weighed by the errors' covariance itself, the
+    // matrix from every row (see OUTPUT_SHARE)
+    let dwarfed = prob.outputs_dwarf_errors(&lam, OUTPUT_SHARE) && prob.weigh_by(&lam).is_ok();
+    let h = if dwarfed {
         prob.reweight = true;
-        prob.evaluate(&theta, true)?.gauss_newton
+        if rows {
+            exact_rows(&mut prob, &theta)?
+        } else {
+            prob.evaluate(&theta, true)?.gauss_newton
+        }
     } else if prob.reweight && solution.gauss_newton.nrows() == prob.p {
         solution.gauss_newton.clone()
     } else {
@@ -519,19 +508,16 @@ fn finish(
     let t0 = std::time::Instant::now();
     let mut covariance = optim::covariance(h.as_ref(), 1.0, 1e-10)?;
     let mut h = h;
-    if suspect(&prob, &h, covariance.rank, &lam) {
-        // the structured matrix is formed in the predictor parameters and mapped to theta
-        // (`normal::matrix_to_theta`): where the outputs are many times the errors (an
-        // unstable model's growing state) the map cancels columns of the outputs' size
-        // after squaring them, and its rank test is rounding. Every row in theta instead.
-        let lo = prob.col_lo;
-        prob.col_lo = 0;
-        let exact = prob.evaluate_rows(&theta);
-        prob.col_lo = lo;
-        if let Ok(ev) = exact {
-            if let Ok(c) = optim::covariance(ev.gauss_newton.as_ref(), 1.0, 1e-10) {
+    let (n, p) = (prob.n, prob.p);
+    // a rank test that missed the p - n^2 directions the orbit leaves, or a diagonal entry
+    // J^T W J cannot have: the structured matrix lost its digits another way
+    let odd = h.nrows() == p
+        && (covariance.rank != p.saturating_sub(n * n) || (0..p).any(|i| h[(i, i)] <= 0.0));
+    if rows && !dwarfed && odd {
+        if let Ok(exact) = exact_rows(&mut prob, &theta) {
+            if let Ok(c) = optim::covariance(exact.as_ref(), 1.0, 1e-10) {
                 covariance = c;
-                h = ev.gauss_newton;
+                h = exact;
             }
         }
     }

@@ -430,6 +430,10 @@ impl Filter {
 }
 
 /// Sum of squares of every output channel over the experiments.
+/// The share of each output's mean square added to its error variance in the search's
+/// weighting ([`Predictor::reweight_at`]): keeps it finite on noise-free data.
+const FLOOR_SHARE: f64 = 1e-12;
+
 fn output_power(experiments: &[(MatRef<'_, f64>, MatRef<'_, f64>)], l: usize) -> Vec<f64> {
     let mut power = vec![0.0; l];
     for (_, y) in experiments {
@@ -534,7 +538,7 @@ impl<'a> Predictor<'a> {
         }
         let floor = output_power(experiments, l)
             .iter()
-            .map(|f| (f / n_samples as f64).max(f64::MIN_POSITIVE) * 1e-12)
+            .map(|f| (f / n_samples as f64).max(f64::MIN_POSITIVE) * FLOOR_SHARE)
             .collect();
         Ok(Predictor {
             exps: experiments.to_vec(),
@@ -762,19 +766,12 @@ impl<'a> Predictor<'a> {
         determinant(&self.innovation_covariance(th))
     }
 
-    /// Weighs by `lam^-1` itself, without the floor (a share `1e-12` of the outputs' power)
-    /// that keeps the search's weighting finite on noise-free data, where that floor is more
-    /// than `1e-6` of an error variance: the covariance at the estimate assumes `W =
-    /// Lambda^-1`, and an output that grows (an unstable model) lifts the floor above
-    /// `Lambda` itself (by 7e4 on a record whose output grew by 1.03^800), making every
-    /// standard deviation that much too large. `false` (nothing changed) when the floor is
-    /// negligible or `lam` is not positive definite.
-    pub(super) fn weight_unfloored(&mut self, lam: &Mat<f64>) -> bool {
-        let l = self.l;
-        if lam.nrows() != l || !(0..l).any(|i| self.floor[i] > 1e-6 * lam[(i, i)]) {
-            return false;
-        }
-        self.weigh_by(lam).is_ok()
+    /// Whether some output's mean square exceeds its error variance (the diagonal of `lam`)
+    /// more than `ratio` times, read from the weighting floor (that mean square times
+    /// [`FLOOR_SHARE`]); false when `lam` does not fit.
+    pub(super) fn outputs_dwarf_errors(&self, lam: &Mat<f64>, ratio: f64) -> bool {
+        lam.nrows() == self.l
+            && (0..self.l).any(|i| self.floor[i] / FLOOR_SHARE > ratio * lam[(i, i)])
     }
 
     /// Sets the weighting from the prediction errors at `theta`.
@@ -791,7 +788,7 @@ impl<'a> Predictor<'a> {
 
     /// `rinv = L^-1` with `L L^T = lam` (the weighting `W = lam^-1`); an error, and nothing
     /// changed, when `lam` is not positive definite.
-    fn weigh_by(&mut self, lam: &Mat<f64>) -> Result<()> {
+    pub(super) fn weigh_by(&mut self, lam: &Mat<f64>) -> Result<()> {
         let llt = lam.llt(Side::Lower).map_err(|_| {
             SysidError::numerical(
                 "prediction-error weighting",
