@@ -38,6 +38,8 @@ from .greybox import GreyBox
 from .outer import OuterParameters, model_of
 from .results import GreyEstimate, _costs, _criterion
 
+__all__ = ["greyest", "GreyEstimate"]
+
 
 def _no_noise_model(a: dict[str, Any]) -> bool:
     """A linear structure fitted without a noise model (the simulation focus, or no ``K``):
@@ -46,7 +48,6 @@ def _no_noise_model(a: dict[str, Any]) -> bool:
     return isinstance(a["structure"], GreyBox) and (a["focus"] == "simulation"
                                                     or a["noise"] == "none")
 
-__all__ = ["greyest", "GreyEstimate"]
 
 _FOCUS = ("prediction", "simulation")
 #: Most random starts ``multistart`` may ask for: each is a whole search, and 10000 is far
