@@ -55,7 +55,7 @@ def test_prediction_focus_at_the_bound_is_named_too(recwarn):
     # enforce_stability=False: no bound holds anything, nothing of the kind is said
     recwarn.clear()
     free = sysid.ssest(_record(integrating=True), 2, enforce_stability=False)
-    assert not [w for w in recwarn if "keeps" in str(w.message)], free.poles()
+    assert not [w for w in recwarn if "of its mode" in str(w.message)], free.poles()
 
 
 def test_prediction_focus_held_by_the_bound_says_so():
@@ -133,7 +133,9 @@ def test_a_pole_pulled_to_the_bound_by_an_offset_names_the_offset():
     with warnings.catch_warnings(record=True) as rec:
         warnings.simplefilter("always")  # the offset's own warning and the search's cap too
         sysid.ssest(d, 2)
-    said = [str(w.message) for w in rec
-            if issubclass(w.category, StabilityWarning) and "keeps" in str(w.message)]
+    # the pole ends just inside the circle (the bound holds it) or just outside, growing by
+    # far less than the record could tell from 1: either way the offset is named
+    said = [str(w.message) for w in rec if issubclass(w.category, StabilityWarning)
+            and "cannot tell it from an integrator" in str(w.message)]
     assert said and "offset left in the data" in said[0]
     assert "detrend(data, 'linear') removes both" in said[0]

@@ -14,7 +14,7 @@ from .._checks import user_stacklevel, warn_iteration_limit
 from .._display import modulus
 from ..errors import IdentifiabilityWarning, StabilityWarning
 from ..models.frd import FRD
-from .boundary import cap_advice, warn_boundary
+from .boundary import cap_advice, grows, warn_boundary
 
 __all__ = ["lines_record_length", "warn_refinement", "warn_undetermined"]
 
@@ -29,7 +29,20 @@ def warn_refinement(res: dict[str, Any], focus: str, max_iter: int, enforce: boo
     level = user_stacklevel()
     if focus == "simulation" or enforce is not False:
         warn_boundary(res["a"], n, stacklevel=level, held=held)
-    if rho >= 1.0:
+    if rho >= 1.0 and enforce is None and n and not grows([rho], n):
+        # a pole the record cannot tell from 1 (an offset left in the data puts one there):
+        # the likelihood-ratio test's "better" is the record's, not the plant's instability
+        warnings.warn(
+            f"the refined model is unstable only marginally (largest pole modulus "
+            f"{modulus(rho)}, a mode that grows by {100 * (rho ** n - 1):.2g} % over the "
+            f"record's {n} samples): the record cannot tell it from an integrator (an "
+            f"integrating plant, a drift, or an offset left in the data), so the static gain "
+            f"and the step response's final value are not determined. If the plant "
+            f"integrates, identify the differenced output; if not, remove the offset and any "
+            f"drift first (sysid.detrend(data, 'linear') removes both); pass "
+            f"enforce_stability=True (or focus='simulation') for a stable model",
+            StabilityWarning, stacklevel=level)
+    elif rho >= 1.0:
         why = ("an unstable model fits the data significantly better than the best stable "
                "one (likelihood-ratio test at 1 %)" if enforce is None else
                "enforce_stability=False keeps only the predictor stable")
