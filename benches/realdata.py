@@ -98,6 +98,9 @@ results/realdata_fresh9.md.
 sweep's records (a rotary flexible link under a servo controller, a quadcopter on a roll rig
 under cascaded PID, an irrigation canal's gate step, a wheel loader at work); sources,
 SHA-256, how each ``.npz`` is made and the findings: results/realdata_fresh10.md.
+``--fresh11-records DIR`` (``FRESH11``, results/realdata_fresh11_table[_<split>].md): the
+eleventh sweep's records (a 2-DOF helicopter's two rotors driven open loop); sources, SHA-256,
+how each ``.npz`` is made and the findings: results/realdata_fresh11.md.
 
 Score: the simulation fit on the validation part, NRMSE %, ``100 (1 - |y - yhat| / |y -
 mean(y)|)`` averaged over outputs, with the initial state fitted by least squares on the
@@ -146,6 +149,7 @@ from realdata_records import (  # noqa: F401
     FRESH8,
     FRESH9,
     FRESH10,
+    FRESH11,
     MORE,
     SWEEPS,
 )
