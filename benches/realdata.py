@@ -611,8 +611,9 @@ def write_md(rows: list[dict], path: Path, argv: list[str]) -> None:
             stable = [r["fit"] for r in others if r["max_pole"] < 1]
             best_s = max(stable) if stable else -np.inf
 
-            def fmt(g):
-                return f"{g:+.1f}" if np.isfinite(g) else ("-inf" if g < 0 else "+inf")
+            def fmt(g):  # (-inf against -inf: no difference to state)
+                return f"{g:+.1f}" if np.isfinite(g) else (
+                    "-" if np.isnan(g) else "-inf" if g < 0 else "+inf")
             gap, gap_s = fmt(me["fit"] - best), fmt(me["fit"] - best_s)
             # the goal: stable and within 0.5 points of the best other, wherever any
             # other reaches a positive fit
