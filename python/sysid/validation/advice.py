@@ -155,22 +155,9 @@ def _flat_inputs(data: Any) -> list[str]:
     return [n for j, n in enumerate(data.input_names) if np.ptp(u[:, j]) == 0]
 
 
-def _stepped_inputs(data: Any) -> dict[str, list[int]]:
-    """The inputs that change at 1 to ``MAX_STEPS`` samples (a step or pulse each), with
-    those samples (:func:`sysid.subspace.steptest.step_changes` of the input alone)."""
-    from ..subspace.steptest import step_changes
-
-    out = {}
-    for j, name in enumerate(data.input_names):
-        c = step_changes([(e[0][:, [j]], None) for e in data.experiments])
-        if c is not None:
-            out[name] = c
-    return out
-
-
 def _excitation(data: Any, flat: list[str]) -> Finding:
     from ..data.input_design import persistent_excitation_order
-    from ..subspace.steptest import step_changes
+    from ..subspace.steptest import step_changes, stepped_inputs
 
     if data.n_inputs == 0:
         return Finding("excitation", "ok", "no inputs: a time series (sysid.ar, sysid.n4sid)")
@@ -194,7 +181,7 @@ def _excitation(data: Any, flat: list[str]) -> Finding:
                        "models by BIC), sysid.procest, sysid.tfest or sysid.oe")
     # one input of several switched a few times (a pulse beside a ramped input): its
     # spectrum is its edges', and the joint count spoke for it as for the others
-    stepped = _stepped_inputs(data)
+    stepped = stepped_inputs(data)
     if stepped and len(stepped) < data.n_inputs:
         rest = [j for j in range(data.n_inputs) if data.input_names[j] not in stepped]
         pe = persistent_excitation_order(
