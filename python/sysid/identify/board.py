@@ -477,14 +477,8 @@ class Board:
     def paired_se(self, r: dict[str, Any], best: dict[str, Any]) -> float:
         """The standard error of the mean block-by-block difference of the fits of ``r`` and
         ``best`` (each block weighing its share of the output variation): how far apart
-        the held-out blocks put two candidates by chance alone. 0 when a fit is not finite,
-        the blocks differ or fewer than two blocks count.
-
-        From three blocks on, a block where both fit worst is not counted: both scores leave
-        it out (:func:`held_out_score`), and a fit has no floor (a quiet block where every
-        model drifts scores hundreds of points below zero), so counted here it would widen
-        the spread of their difference without bound and make every simpler candidate a tie
-        with the best. (A block where both fit best stays: a fit is at most 100 %.)
+        the held-out blocks put two candidates by chance alone. 0 when a fit is not finite
+        or the blocks differ.
 
         Examples
         --------
@@ -494,23 +488,14 @@ class Board:
         >>> b.shares = np.full(4, 0.25)
         >>> r = {"fold_fits": [70.0, 64.0, 67.0, 75.0]}
         >>> best = {"fold_fits": [76.0, 49.0, 74.0, 72.0]}
-        >>> round(b.paired_se(r, best), 2)  # block 1 is both worst: -6, -7, 3 count
-        3.18
-        >>> best["fold_fits"] = [76.0, 69.0, 59.0, 72.0]  # worst elsewhere: -6, -5, 8, 3
-        >>> round(b.paired_se(r, best), 2)
-        3.34
+        >>> round(b.paired_se(r, best), 2)  # differences -6, 15, -7, 3: mean 1.25
+        5.11
         """
         a, b = np.asarray(r.get("fold_fits") or [], float), np.asarray(
             best.get("fold_fits") or [], float)
         w = np.asarray(self.shares, float)
         if a.shape != b.shape or a.shape != w.shape or not (
                 np.all(np.isfinite(a)) and np.all(np.isfinite(b))):
-            return 0.0
-        if a.size >= 3 and np.argmin(a) == np.argmin(b):  # (the first of equal fits, as
-            # held_out_score's stable sort leaves out)
-            keep = np.arange(a.size) != np.argmin(a)
-            a, b, w = a[keep], b[keep], w[keep]
-        if a.size < 2 or np.sum(w) <= 0:
             return 0.0
         w = w / np.sum(w)
         d = a - b
