@@ -98,6 +98,9 @@ results/realdata_fresh9.md.
 sweep's records (a rotary flexible link under a servo controller, a quadcopter on a roll rig
 under cascaded PID, an irrigation canal's gate step, a wheel loader at work); sources,
 SHA-256, how each ``.npz`` is made and the findings: results/realdata_fresh10.md.
+``--fresh11-records DIR`` (``FRESH11``, results/realdata_fresh11_table[_<split>].md): the
+eleventh sweep's records (a 2-DOF helicopter's two rotors driven open loop); sources, SHA-256,
+how each ``.npz`` is made and the findings: results/realdata_fresh11.md.
 
 Score: the simulation fit on the validation part, NRMSE %, ``100 (1 - |y - yhat| / |y -
 mean(y)|)`` averaged over outputs, with the initial state fitted by least squares on the
@@ -146,6 +149,7 @@ from realdata_records import (  # noqa: F401
     FRESH8,
     FRESH9,
     FRESH10,
+    FRESH11,
     MORE,
     SWEEPS,
 )
@@ -607,8 +611,9 @@ def write_md(rows: list[dict], path: Path, argv: list[str]) -> None:
             stable = [r["fit"] for r in others if r["max_pole"] < 1]
             best_s = max(stable) if stable else -np.inf
 
-            def fmt(g):
-                return f"{g:+.1f}" if np.isfinite(g) else ("-inf" if g < 0 else "+inf")
+            def fmt(g):  # (-inf against -inf: no difference to state)
+                return f"{g:+.1f}" if np.isfinite(g) else (
+                    "-" if np.isnan(g) else "-inf" if g < 0 else "+inf")
             gap, gap_s = fmt(me["fit"] - best), fmt(me["fit"] - best_s)
             # the goal: stable and within 0.5 points of the best other, wherever any
             # other reaches a positive fit

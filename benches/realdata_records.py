@@ -136,6 +136,15 @@ FRESH10 = {
     # throttle, lift and tilt levers -> engine speed, boom and bucket angular speeds
 }
 
+#: the eleventh sweep's records (``--fresh11-records DIR``), read as ``FRESH``'s are (sources:
+#: results/realdata_fresh11.md)
+FRESH11 = {
+    "heli_pitch": ("heli_pitch", None),  # 2-DOF helicopter (twin rotor), 20 ms, open loop:
+    # programmed pitch- and yaw-motor voltages -> pitch, yaw
+    "heli_pitch_2runs": ("heli_pitch", "heli_pitch_b"),  # the same, a second run validates
+    "heli_yaw": ("heli_yaw", None),  # the same rig, a pulse on the yaw motor -> yaw, pitch
+}
+
 #: the sweeps read from ``DIR/<name>.npz``: ``--<sweep>-records DIR`` runs a table's records
 #: into ``results/<stem>[_<split>].md`` (the third sweep's tables beside its account,
 #: results/realdata_fresh3.md)
@@ -147,4 +156,5 @@ SWEEPS = {"more": ("MORE", "realdata_more"), "fresh": ("FRESH", "realdata_fresh"
           "fresh7": ("FRESH7", "realdata_fresh7_table"),
           "fresh8": ("FRESH8", "realdata_fresh8_table"),
           "fresh9": ("FRESH9", "realdata_fresh9_table"),
-          "fresh10": ("FRESH10", "realdata_fresh10_table")}
+          "fresh10": ("FRESH10", "realdata_fresh10_table"),
+          "fresh11": ("FRESH11", "realdata_fresh11_table")}

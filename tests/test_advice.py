@@ -164,3 +164,35 @@ def test_a_step_test_is_not_called_richly_exciting():
     assert "order >= " not in f.finding and "procest" in f.action
     with pytest.raises(sysid.errors.ExcitationError):  # what the finding says of them
         sysid.n4sid(sysid.IOData(u - u.mean(), y - y.mean(), 1.0), 2)
+
+
+def test_a_pulse_in_mid_record_is_a_step_test_the_subspace_fits_may_still_take():
+    # a helicopter's yaw motor pulsed (on at sample 2, off at 951): the finding said "the
+    # subspace methods refuse it", but the pulse's second edge lies inside their data matrix
+    # and n4sid returned a model; the finding now says when they refuse one
+    n = 1500
+    u = np.zeros((n, 1))
+    u[2:951] = 6.0
+    y = G.simulate(u) + 0.01 * np.random.default_rng(1).standard_normal((n, 1))
+    f = sysid.advice(sysid.IOData(u, y, 1.0))["excitation"]
+    assert f.verdict == "note" and "sample(s) 2, 951 " in f.finding
+    assert "refuse it when they all come before" in f.finding
+    assert "methods refuse it" not in f.finding
+    m = sysid.n4sid(sysid.IOData(u - u.mean(), y - y.mean(), 1.0), 2)  # no refusal
+    assert np.asarray(m.A).shape == (2, 2)
+
+
+def test_one_pulsed_input_beside_a_rich_one_is_named():
+    # a helicopter's pitch motor ramped while its yaw motor was pulsed once: the joint
+    # spectral count read "input persistently exciting of order >= 40" for both; the pulsed
+    # input is now named, with the samples where it changes, and the others' count given
+    rng = np.random.default_rng(2)
+    n = 1200
+    u = np.c_[rng.standard_normal(n), np.zeros(n)]
+    u[400:700, 1] = 6.0
+    m = sysid.StateSpaceModel([[0.8]], [[1.0, 0.5]], [[1.0]])
+    y = m.simulate(u) + 0.01 * rng.standard_normal((n, 1))
+    f = sysid.advice(sysid.IOData(u, y, 1.0))["excitation"]
+    assert f.verdict == "note" and "u1 at sample(s) 400, 700" in f.finding
+    assert "other input(s) persistently exciting of order >= 40" in f.finding
+    assert "u0 at" not in f.finding

@@ -104,6 +104,7 @@ from .choice import _choose
 from .climb import higher_orders
 from .integrating import integrating_candidates, integrating_note
 from .notes import (
+    excitation_check,
     loop_checks,
     persistent_mode_check,
     refit_cap_check,
@@ -197,10 +198,7 @@ def _checks(data: IOData) -> tuple[dict[str, Any], bool]:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         try:
-            pe = sysid.persistent_excitation_order([e[0] for e in data.experiments]
-                                                   if data.n_experiments > 1
-                                                   else data.experiments[0][0], 40)
-            checks["excitation"] = f"input persistently exciting of order >= {pe}"
+            checks["excitation"] = excitation_check(data)
         except Exception as e:  # noqa: BLE001 - recorded, not raised
             checks["excitation"] = f"not checked ({e})"
         try:

@@ -16,9 +16,9 @@ from ..data.iodata import IOData
 from ..models.continuous import ContinuousStateSpace
 from ..validation.crossval import trend_share
 
-__all__ = ["trend_check", "persistent_mode_check", "weak_check", "refit_cap_check",
-           "loop_checks", "loop_feedthrough_check", "loop_bias_check", "TREND_SHARE",
-           "TREND_OUTPUT", "PERSISTENT_DECAY", "WEAK_FIT"]
+__all__ = ["excitation_check", "trend_check", "persistent_mode_check", "weak_check",
+           "refit_cap_check", "loop_checks", "loop_feedthrough_check", "loop_bias_check",
+           "TREND_SHARE", "TREND_OUTPUT", "PERSISTENT_DECAY", "WEAK_FIT"]
 
 #: a held-out fit below this (in %) explains less than half of the outputs' variation
 #: (``fit = 100 (1 - sqrt(1 - explained))``): ``checks["weak"]`` says so
@@ -30,6 +30,40 @@ TREND_SHARE = 0.2
 #: ... and at least this share of the output's own variation (a drift that small next to
 #: what the output does is not worth a note, however much of a tiny error it is)
 TREND_OUTPUT = 0.01
+
+
+def excitation_check(data: IOData) -> str:
+    """``checks["excitation"]``: the order of persistent excitation of the inputs (the
+    spectral count, :func:`sysid.persistent_excitation_order`), and the inputs that change at
+    a few samples only (:func:`sysid.subspace.steptest.stepped_inputs`): a step's spectrum
+    is its edges', so the count speaks for the other inputs only (a pulse beside a ramped
+    input read "order >= 40" for both).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.identify.notes import excitation_check
+    >>> u = np.c_[np.random.default_rng(0).standard_normal(300), np.r_[np.zeros(100),
+    ...                                                              np.ones(200)]]
+    >>> excitation_check(sysid.IOData(u, np.zeros((300, 1)), 1.0))[:46]
+    'input(s) u1 change only a few times (u1 at sam'
+    """
+    from ..data.input_design import persistent_excitation_order
+    from ..subspace.steptest import stepped_inputs
+
+    def order(cols: list[int]) -> str:
+        us = [e[0][:, cols] for e in data.experiments]
+        pe = persistent_excitation_order(us if len(us) > 1 else us[0], 40)
+        return f"{'>= ' if pe == 40 else ''}{pe}"
+    stepped = stepped_inputs(data)
+    rest = [j for j, n in enumerate(data.input_names) if n not in stepped]
+    if not stepped:
+        return f"input persistently exciting of order {order(rest)}"
+    said = "; ".join(f"{n} at sample(s) {', '.join(map(str, c))}" for n, c in stepped.items())
+    return (f"input(s) {', '.join(stepped)} change only a few times ({said}): steps or "
+            "pulses, whose responses alone determine their paths"
+            + (f"; the other input(s) persistently exciting of order {order(rest)}"
+               if rest else ""))
 
 
 def trend_check(model: Any, data: IOData, checks: dict[str, Any]) -> None:

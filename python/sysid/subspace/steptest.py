@@ -16,7 +16,8 @@ import numpy as np
 
 from ..errors import ExcitationError
 
-__all__ = ["step_test_note", "step_changes", "refuse_step_test", "MAX_STEPS"]
+__all__ = ["step_test_note", "step_changes", "stepped_inputs", "refuse_step_test",
+           "MAX_STEPS"]
 
 #: at most this many samples where an input changes make a record a step test
 MAX_STEPS = 4
@@ -46,6 +47,26 @@ def step_changes(experiments: list[Any]) -> list[int] | None:
         if len(changes) > MAX_STEPS:
             return None
     return changes or None
+
+
+def stepped_inputs(data: Any) -> dict[str, list[int]]:
+    """The inputs of record ``data`` that each change at 1 to :data:`MAX_STEPS` samples (a
+    step or a pulse), by name, with those samples (:func:`step_changes` of the input alone):
+    of several inputs, one may be a step test beside others that are richly excited.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> u = np.c_[np.sin(np.arange(100.0)), np.r_[np.zeros(40), np.ones(60)]]
+    >>> stepped_inputs(sysid.IOData(u, np.zeros((100, 1)), 1.0))
+    {'u1': [40]}
+    """
+    out = {}
+    for j, name in enumerate(data.input_names):
+        c = step_changes([(e[0][:, [j]], None) for e in data.experiments])
+        if c is not None:
+            out[name] = c
+    return out
 
 
 def step_test_note(experiments: list[Any], past: int) -> str:

@@ -157,7 +157,7 @@ def _flat_inputs(data: Any) -> list[str]:
 
 def _excitation(data: Any, flat: list[str]) -> Finding:
     from ..data.input_design import persistent_excitation_order
-    from ..subspace.steptest import step_changes
+    from ..subspace.steptest import step_changes, stepped_inputs
 
     if data.n_inputs == 0:
         return Finding("excitation", "ok", "no inputs: a time series (sysid.ar, sysid.n4sid)")
@@ -168,13 +168,35 @@ def _excitation(data: Any, flat: list[str]) -> Finding:
     steps = step_changes(data.experiments)
     if steps is not None:
         # the spectral count assumes a stationary input: that of a step test is its edges'
-        # (an irrigation canal's gate step at sample 1 read "order >= 40")
+        # (an irrigation canal's gate step at sample 1 read "order >= 40"); the subspace
+        # fits refuse it only when every change precedes their data matrix's future rows (a
+        # pulse in mid-record passed n4sid's rank test and gave a 22-state model)
         return Finding("excitation", "note",
                        f"the input changes at sample(s) {', '.join(map(str, steps))} only: a "
                        f"step test, not a stationary input whose spectrum counts its "
-                       f"excitation; the subspace methods refuse it",
+                       f"excitation; the subspace fits see only the few windows around its "
+                       f"changes (and refuse it when they all come before their data "
+                       f"matrix's rows of future inputs)",
                        "fit models simulated from rest: sysid.identify(data) (process "
                        "models by BIC), sysid.procest, sysid.tfest or sysid.oe")
+    # one input of several switched a few times (a pulse beside a ramped input): its
+    # spectrum is its edges', and the joint count spoke for it as for the others
+    stepped = stepped_inputs(data)
+    if stepped and len(stepped) < data.n_inputs:
+        rest = [j for j in range(data.n_inputs) if data.input_names[j] not in stepped]
+        pe = persistent_excitation_order(
+            [e[0][:, rest] for e in data.experiments] if data.n_experiments > 1
+            else u[:, rest], 40)
+        said = "; ".join(f"{n} at sample(s) {', '.join(map(str, c))}"
+                         for n, c in stepped.items())
+        return Finding("excitation", "note",
+                       f"input(s) {', '.join(stepped)} change only a few times ({said}): "
+                       f"steps or pulses, whose responses alone determine their paths, not a "
+                       f"stationary excitation a spectrum counts; the other input(s) "
+                       f"persistently exciting of order {'>= ' if pe == 40 else ''}{pe}",
+                       "judge the model of those paths by simulation on a record holding "
+                       "other steps (identify(..., validation=...)), or excite them richly "
+                       "(sysid.idinput)")
     pe = persistent_excitation_order(
         [e[0] for e in data.experiments] if data.n_experiments > 1 else u, 40)
     if pe < 4:
