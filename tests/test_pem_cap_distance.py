@@ -32,7 +32,7 @@ def _poor_start(data: sysid.IOData, a: float = 0.9, b: float = 0.5) -> sysid.Sta
 def test_the_remaining_decrease_predicts_the_rest_of_the_way():
     data = _record()
     n = sum(data.lengths)
-    for cap in (1, 2, 3):
+    for cap in (1, 2, 3, 4):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             m = sysid.pem(data, _poor_start(data), focus="simulation", max_iter=cap)
@@ -41,13 +41,12 @@ def test_the_remaining_decrease_predicts_the_rest_of_the_way():
         assert info["stop"] == "maximum iterations"
         # the criterion is the sum of squares: the residual variance of the capped fit is
         # cost / n; its decrease to the end, in those variances, is what was predicted
-        # (about 890, 41 and 21 here, within 11 % of the search that went on after the
-        # first iteration, 1 % after the others; the fourth iteration converges)
+        # (about 900, 260, 74 and 22 here, each within 4 % of the search that went on)
         before, after = info["cost"][-1], end.info["pem"]["cost"][-1]
         actual = (before - after) / (before / n) / 2.0
         predicted = info["remaining_decrease"]
         assert np.isfinite(predicted) and predicted > 0
-        assert abs(actual / predicted - 1) < 0.15, (cap, predicted, actual)
+        assert abs(actual / predicted - 1) < 0.1, (cap, predicted, actual)
     assert np.isnan(end.info["pem"]["remaining_decrease"])  # converged: not capped
 
 

@@ -281,16 +281,10 @@ def test_lines_fit_says_when_the_order_is_above_what_the_lines_determine():
     A = np.zeros((4, 4))
     A[:2, :2] = true.A
     A[2:, 2:] = r * np.array([[np.cos(th), -np.sin(th)], [np.sin(th), np.cos(th)]])
-    # (disconnected: B and C zero on it. Connected by 1e-3 the lines see it a little, and the
-    # search moves it inside as it lowers the cost)
-    start = sysid.StateSpaceModel(A, [[1.0], [0.0], [0.0], [0.0]],
-                                  [[0.3, 0.2, 0.0, 0.0]], [[0.0]])
-    with warnings.catch_warnings(record=True) as said:
-        warnings.simplefilter("always")
+    start = sysid.StateSpaceModel(A, [[1.0], [0.0], [1e-3], [0.0]],
+                                  [[0.3, 0.2, 1e-3, 0.0]], [[0.0]])
+    with pytest.warns(sysid.StabilityWarning, match=r"over the record \(1024 samples\)"):
         sysid.pem(data, start, periods=4)
-    held = [w for w in said if issubclass(w.category, sysid.StabilityWarning)]
-    assert len(held) == 1 and "over the record (1024 samples)" in str(held[0].message)
-    assert any(issubclass(w.category, sysid.IdentifiabilityWarning) for w in said)
 
 
 # ssest's time-domain search on periodic data: one more start from the averaged lines
@@ -327,16 +321,13 @@ def test_ssest_on_a_periodic_record_starts_from_the_lines_when_they_fit_better(s
     start = m.info["start"]
     assert start["method"] == "frd_subspace"
     assert start["losses"]["frd_subspace"] == min(start["losses"].values())
-    # the time-domain weightings alone (one named: no periodic start) end far away, or, where
-    # their search finds its way (seed 0 since the search's basis follows its metric), at the
-    # same minimum: never below the periodic start's
-    with warnings.catch_warnings():  # it may stop at its cap, far from the other minimum
+    # the time-domain weightings alone (one named: no periodic start) end far away
+    with warnings.catch_warnings():  # it stops at its cap, far from the other minimum
         warnings.simplefilter("ignore", sysid.IterationLimitWarning)
         alone = sysid.ssest(data, 6, focus="simulation", method="moesp")
     assert "frd_subspace" not in alone.info["start"]["losses"]
-    assert error(m) < 0.05
-    assert error(alone) > 0.5 or error(alone) < 0.05
-    assert m.info["pem"]["cost"][-1] <= (1 + 1e-6) * alone.info["pem"]["cost"][-1]
+    assert error(m) < 0.05 < 0.5 < error(alone)
+    assert m.info["pem"]["cost"][-1] < 0.3 * alone.info["pem"]["cost"][-1]
 
 
 def test_ssest_on_a_random_input_has_no_periodic_start():

@@ -22,9 +22,8 @@
 //! data-driven local coordinates of McKelvey, Helmersson & Ribarits 2004). The damping `mu`
 //! follows the ratio of actual to predicted decrease (a trust region in the scaled norm). A
 //! trial point outside the bounds is projected onto them; a trial point the provider calls
-//! inadmissible (an unstable predictor, say) is never evaluated: the step is first turned
-//! along the admissible set's boundary, when the provider measures it
-//! ([`Problem::bound_margin`]), then halved until it is admissible. Only points that decrease the cost are accepted, so the search never
+//! inadmissible (an unstable predictor, say) is never evaluated: the step is halved until it
+//! is admissible. Only points that decrease the cost are accepted, so the search never
 //! diverges.
 //!
 //! With [`Options::geodesic`] each damped step `v` gets the geodesic acceleration of
@@ -42,7 +41,6 @@
 //! a pseudo-inverse restricted to the identifiable directions, and returns the directions
 //! the data do not determine.
 
-mod boundary;
 mod covariance;
 pub(crate) mod dense;
 mod normal;
@@ -152,13 +150,9 @@ pub trait Problem {
     fn admissible(&mut self, _theta: &[f64]) -> bool {
         true
     }
-    /// A basis (p x q) of the directions the search may move in at `theta`, or `None` for all
-    /// of them. Recomputed at every iterate. `scale` (p, positive) is the metric the search
-    /// damps its steps in (`sqrt` of the Gauss-Newton matrix's diagonal: Marquardt's scaling):
-    /// a basis orthonormal in it (`diag(scale) T` orthonormal) keeps that damping what it is
-    /// without the basis; one orthonormal in `theta` itself mixes parameters whose effects
-    /// differ by orders of magnitude, and the damped steps then crawl.
-    fn search_basis(&mut self, _theta: &[f64], _scale: &[f64]) -> Result<Option<Mat<f64>>> {
+    /// An orthonormal basis (p x q) of the directions the search may move in at `theta`, or
+    /// `None` for all of them. Recomputed at every iterate.
+    fn search_basis(&mut self, _theta: &[f64]) -> Result<Option<Mat<f64>>> {
         Ok(None)
     }
     /// Called after each accepted step, before the Jacobian is formed there; the provider may
@@ -191,14 +185,6 @@ pub trait Problem {
     /// `None` (the default): there are none, or the provider does not say.
     fn invariant_directions(&mut self, _theta: &[f64]) -> Result<Option<Mat<f64>>> {
         Ok(None)
-    }
-    /// How far `theta` lies beyond the boundary of the admissible set ([`Problem::admissible`]):
-    /// negative inside, a continuous function of `theta` (for a state-space predictor, the
-    /// largest spectral radius the set bounds, less its limit). `None` (the default): the
-    /// provider has no such function. A step that would leave the set is then turned along
-    /// the boundary (its part along this function's gradient removed) before it is halved.
-    fn bound_margin(&mut self, _theta: &[f64]) -> Option<f64> {
-        None
     }
     /// The number of scalar residuals in the cost (for [`Options::tol_statistical`]);
     /// `None` (the default) when the provider does not say.

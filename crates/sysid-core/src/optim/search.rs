@@ -1,7 +1,6 @@
 //! The damped Gauss-Newton iteration of [`minimize`].
 
-use super::boundary::{shape, Shaped};
-use super::reduced::{reduce, Metric, Reduced, Solver};
+use super::reduced::{reduce, Reduced, Solver};
 use super::{Evaluation, Flow, GeodesicCounts, Iteration, Options, Problem, Solution, StopReason};
 use crate::error::{Result, SysidError};
 use faer::Mat;
@@ -192,7 +191,7 @@ fn evaluate_point(
     })
 }
 
-pub(super) fn project(opt: &Options, theta: &mut [f64]) {
+fn project(opt: &Options, theta: &mut [f64]) {
     if let Some(lo) = &opt.lower {
         for (t, l) in theta.iter_mut().zip(lo) {
             *t = t.max(*l);
@@ -288,8 +287,6 @@ pub fn minimize(
     // consecutive iterations whose Gauss-Newton matrix is reused from an earlier point
     let mut frozen = 0usize;
     let mut last_red: Option<Reduced> = None;
-    // the same step problem in the plain metric's basis (a provider's basis, small problems)
-    let mut last_alt: Option<Reduced> = None;
     let mut geo = GeodesicCounts::default();
     let mut shortened = 0usize;
     let mut remaining = f64::NAN;
@@ -335,11 +332,8 @@ pub fn minimize(
                 }
                 r
             }
-            _ => match reduce(problem, options, &pt, &blocked, Metric::Marquardt) {
-                Ok(r) => {
-                    last_alt = None;
-                    r
-                }
+            _ => match reduce(problem, options, &pt, &blocked) {
+                Ok(r) => r,
                 // the tests at the cap are a courtesy: a failure there ends as before
                 Err(_) if capped => {
                     stop = StopReason::MaxIterations;
@@ -348,15 +342,6 @@ pub fn minimize(
                 Err(e) => return Err(e),
             },
         };
-        if stale {
-            if let Some(alt) = last_alt.as_mut().filter(|a| a.blocked == blocked) {
-                alt.set_gradient(&pt.g);
-            } else {
-                last_alt = None;
-            }
-        } else if !capped && red.basis_given && matches!(red.solver, Solver::Eigen { .. }) {
-            last_alt = reduce(problem, options, &pt, &blocked, Metric::Plain).ok();
-        }
         let red = &*last_red.insert(red);
         condition = red.condition;
         let gnorm = red
@@ -448,43 +433,31 @@ pub fn minimize(
                 Some(a) => (0..p).map(|i| v[i] + 0.5 * a[i]).collect(),
                 None => v.clone(),
             };
-            // a step that finds no decrease is tried again in the plain metric's basis (the
-            // same Gauss-Newton step up to its similarity part, which the Marquardt metric
-            // spreads into parameters of small effect: a gain error corrected through `A`
-            // and `C`, or, noise-free, only linear convergence) before the damping is raised
-            let turn = accel.is_none();
-            let mut best: Option<(Shaped, f64)> = None;
-            if let Some(sh) = shape(problem, options, &pt, s, &blocked, turn) {
-                let c = trial_cost(problem, options, &sh.trial, &mut evals)?;
-                best = Some((sh, c));
+            let mut alpha = 1.0;
+            let mut trial: Vec<f64> = (0..p).map(|i| pt.theta[i] + s[i]).collect();
+            project(options, &mut trial);
+            let mut ok = problem.admissible(&trial);
+            let mut halvings = 0;
+            while !ok && halvings < 30 {
+                alpha *= 0.5;
+                halvings += 1;
+                trial = (0..p).map(|i| pt.theta[i] + alpha * s[i]).collect();
+                project(options, &mut trial);
+                ok = problem.admissible(&trial);
             }
-            let descends = best.as_ref().is_some_and(|(_, c)| *c < pt.cost);
-            if let (Some(alt), None, false) = (&last_alt, &accel, descends) {
-                let other = alt.step(mu, options.rank_tol);
-                if let Some(sh) = shape(problem, options, &pt, other, &blocked, turn) {
-                    let c = trial_cost(problem, options, &sh.trial, &mut evals)?;
-                    if c.is_finite() && best.as_ref().is_none_or(|(_, b)| !b.is_finite() || c < *b)
-                    {
-                        best = Some((sh, c));
-                    }
-                }
-            }
-            let Some((
-                Shaped {
-                    trial,
-                    alpha,
-                    halvings,
-                    turned: turned_step,
-                },
-                cand_cost,
-            )) = best
-            else {
+            if !ok {
                 if !stale {
                     mu = (mu * 10.0).max(1e-6);
                 }
                 continue;
-            };
+            }
             // the trial is judged on its cost alone; the Jacobian is formed once accepted
+            evals += 1;
+            let t0 = std::time::Instant::now();
+            crate::interrupt::check()?;
+            let raw = problem.evaluate(&trial, false)?;
+            prof("cost", t0);
+            let cand_cost = regularise(options, &trial, &raw).0;
             let actual = pt.cost - cand_cost;
             if cand_cost.is_finite() && actual > 0.0 {
                 // predicted decrease of the (projected) step taken; with an acceleration,
@@ -493,8 +466,13 @@ pub fn minimize(
                     Some(_) => v.iter().map(|x| alpha * x).collect(),
                     None => (0..p).map(|i| trial[i] - pt.theta[i]).collect(),
                 };
-                let quad = curvature(&pt, &st);
-                let pred = predicted(&pt, &st);
+                let mut quad = 0.0;
+                for i in 0..p {
+                    let hs: f64 = (0..p).map(|j| pt.h[(i, j)] * st[j]).sum();
+                    quad += st[i] * hs;
+                }
+                let lin: f64 = (0..p).map(|i| pt.g[i] * st[i]).sum();
+                let pred = -(lin + 0.5 * quad);
                 let rho = if pred > 0.0 { actual / pred } else { 0.0 };
                 let used = mu;
                 // the damping follows the Gauss-Newton model, not a reused one
@@ -507,7 +485,7 @@ pub fn minimize(
                     eprintln!("PROF step mu {used:e} rho {rho} pred {pred:e} actual {actual:e} try {try_} halvings {halvings}");
                 }
                 accepted = Some((trial, cand_cost, used, rho, quad, accel.is_some()));
-                cut = halvings > 0 || turned_step;
+                cut = halvings > 0;
                 break;
             }
             if std::env::var_os("SYSID_PROFILE").is_some() {
@@ -661,33 +639,4 @@ pub fn minimize(
         shortened,
         remaining_decrease: remaining,
     })
-}
-
-/// `st^T H st` at `pt`.
-fn curvature(pt: &Point, st: &[f64]) -> f64 {
-    let p = st.len();
-    (0..p)
-        .map(|i| st[i] * (0..p).map(|j| pt.h[(i, j)] * st[j]).sum::<f64>())
-        .sum()
-}
-
-/// The Gauss-Newton model's decrease along the step `st` from `pt`.
-fn predicted(pt: &Point, st: &[f64]) -> f64 {
-    let lin: f64 = (0..st.len()).map(|i| pt.g[i] * st[i]).sum();
-    -(lin + 0.5 * curvature(pt, st))
-}
-
-/// The cost of a trial point (no Jacobian), counted as an evaluation.
-fn trial_cost(
-    problem: &mut dyn Problem,
-    options: &Options,
-    trial: &[f64],
-    evals: &mut usize,
-) -> Result<f64> {
-    *evals += 1;
-    let t0 = std::time::Instant::now();
-    crate::interrupt::check()?;
-    let raw = problem.evaluate(trial, false)?;
-    prof("cost", t0);
-    Ok(regularise(options, trial, &raw).0)
 }

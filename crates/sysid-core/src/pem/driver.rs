@@ -55,12 +55,8 @@ impl Problem for Predictor<'_> {
         self.is_admissible(th)
     }
 
-    fn bound_margin(&mut self, th: &[f64]) -> Option<f64> {
-        self.margin(th)
-    }
-
-    fn search_basis(&mut self, th: &[f64], scale: &[f64]) -> Result<Option<Mat<f64>>> {
-        self.local_basis(th, scale)
+    fn search_basis(&mut self, th: &[f64]) -> Result<Option<Mat<f64>>> {
+        self.local_basis(th)
     }
 
     fn invariant_directions(&mut self, th: &[f64]) -> Result<Option<Mat<f64>>> {
