@@ -65,6 +65,20 @@ def first_order_record():
     return m, u, y, sysid.IOData(u=u, y=y, dt=0.1)
 
 
+def pulsed_record(n, start, stop, level, noise, seed):
+    """A helicopter-like record of two inputs: ``u0`` white, ``u1`` zero but ``level`` over
+    samples ``start:stop`` (one pulse); one output of a first-order plant driven by both,
+    with white noise of standard deviation ``noise``."""
+    import sysid
+
+    rng = np.random.default_rng(seed)
+    u = np.c_[rng.standard_normal(n), np.zeros(n)]
+    u[start:stop, 1] = level
+    m = sysid.StateSpaceModel([[0.8]], [[1.0, 0.5]], [[1.0]])
+    y = m.simulate(u) + noise * rng.standard_normal((n, 1))
+    return sysid.IOData(u, y, 1.0)
+
+
 def quiet(fn, *a, **k):
     """``fn(*a, **k)`` with every warning silenced."""
     with warnings.catch_warnings():

@@ -186,13 +186,9 @@ def test_one_pulsed_input_beside_a_rich_one_is_named():
     # a helicopter's pitch motor ramped while its yaw motor was pulsed once: the joint
     # spectral count read "input persistently exciting of order >= 40" for both; the pulsed
     # input is now named, with the samples where it changes, and the others' count given
-    rng = np.random.default_rng(2)
-    n = 1200
-    u = np.c_[rng.standard_normal(n), np.zeros(n)]
-    u[400:700, 1] = 6.0
-    m = sysid.StateSpaceModel([[0.8]], [[1.0, 0.5]], [[1.0]])
-    y = m.simulate(u) + 0.01 * rng.standard_normal((n, 1))
-    f = sysid.advice(sysid.IOData(u, y, 1.0))["excitation"]
+    from conftest import pulsed_record
+
+    f = sysid.advice(pulsed_record(1200, 400, 700, 6.0, 0.01, seed=2))["excitation"]
     assert f.verdict == "note" and "u1 at sample(s) 400, 700" in f.finding
     assert "other input(s) persistently exciting of order >= 40" in f.finding
     assert "u0 at" not in f.finding

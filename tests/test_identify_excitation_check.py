@@ -5,17 +5,14 @@ import numpy as np
 
 import sysid
 
+from conftest import pulsed_record
+
 
 def test_a_pulsed_input_beside_a_rich_one_is_named_in_identifys_checks():
     # a helicopter's pitch motor ramped while its yaw motor was pulsed once: the check read
     # "input persistently exciting of order >= 40" for both inputs
-    rng = np.random.default_rng(5)
-    n = 900
-    u = np.c_[rng.standard_normal(n), np.zeros(n)]
-    u[300:500, 1] = 2.0
-    m = sysid.StateSpaceModel([[0.8]], [[1.0, 0.5]], [[1.0]])
-    y = m.simulate(u) + 0.05 * rng.standard_normal((n, 1))
-    res = sysid.identify(sysid.IOData(u, y, 1.0), refine=False, progress=False)
+    data = pulsed_record(900, 300, 500, 2.0, 0.05, seed=5)
+    res = sysid.identify(data, refine=False, progress=False)
     c = res.checks["excitation"]
     assert "u1 at sample(s) 300, 500" in c and "steps or pulses" in c
     assert "other input(s) persistently exciting of order >= 40" in c
