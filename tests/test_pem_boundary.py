@@ -141,7 +141,8 @@ def test_a_pole_pulled_to_the_bound_by_an_offset_names_the_offset():
 
 def test_a_marginally_unstable_pole_is_named_as_the_record_sees_it():
     # an offset left in the data can put the largest pole just outside the circle (1 + 6e-6
-    # on the level plant's record above, growing by 0.5 % over its 700 samples): the
+    # on the level plant's record above, growing by 0.5 % over its 700 samples, with the
+    # search of branch s59_pem_metric; main's ends just inside): the
     # likelihood-ratio test's "fits significantly better" was true of the record and said
     # nothing of why; the record cannot tell such a pole from an integrator, and now says so
     from sysid.pem.diagnostics import warn_refinement
