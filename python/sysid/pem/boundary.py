@@ -18,8 +18,8 @@ import numpy as np
 from .._checks import PERSISTENT_DECAY, mode_kept, user_stacklevel
 from ..errors import StabilityWarning
 
-__all__ = ["cap_advice", "grows", "insists", "warn_boundary", "warn_insisted",
-           "warn_poles_at_bound"]
+__all__ = ["cap_advice", "grows", "insists", "integrator_advice", "warn_boundary",
+           "warn_insisted", "warn_poles_at_bound"]
 
 
 def grows(poles: Any, n: int, dt: float = 0.0) -> bool:
@@ -71,6 +71,22 @@ def warn_boundary(A: np.ndarray, n: int, stacklevel: int | None = None,
         stacklevel=user_stacklevel() if stacklevel is None else stacklevel + 1)
 
 
+def integrator_advice(integrating: str) -> str:
+    """What a pole the record cannot tell from 1 leaves undetermined, and the two fixes
+    (``integrating``: the advice for an integrating plant), for the warnings that name one.
+
+    Examples
+    --------
+    >>> from sysid.pem.boundary import integrator_advice
+    >>> integrator_advice("use arx")[:30]
+    'so the static gain and the ste'
+    """
+    return ("so the static gain and the step response's final value (which grow as "
+            f"1 / (1 - |p|)) are not determined. If the plant integrates, {integrating}; if "
+            "not, remove the offset and any drift first (sysid.detrend(data, 'linear') "
+            "removes both)")
+
+
 def warn_poles_at_bound(poles: np.ndarray, n: int, model: str, bound: str | None, *,
                         integrating: str, lower: str, stacklevel: int | None = None) -> bool:
     """:func:`warn_boundary` for the ``poles`` of any search that keeps them inside the
@@ -109,10 +125,7 @@ def warn_poles_at_bound(poles: np.ndarray, n: int, model: str, bound: str | None
                f"cannot tell it from an integrator"
                if bound else "the record cannot tell it from an integrator (an integrating "
                "plant, a drift, or an offset left in the data)")
-        msg = (f"{model} has {what}: {why}, so the static gain and the step response's final "
-               f"value (which grow as 1 / (1 - |p|)) are not determined. If the plant "
-               f"integrates, {integrating}; if not, remove the offset and any drift first "
-               f"(sysid.detrend(data, 'linear') removes both)")
+        msg = f"{model} has {what}: {why}, {integrator_advice(integrating)}"
     else:
         where = (f"{bound}, and such a pair usually sits where that bound held it" if bound
                  else "such a pair usually comes from")

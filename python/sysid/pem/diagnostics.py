@@ -14,7 +14,7 @@ from .._checks import user_stacklevel, warn_iteration_limit
 from .._display import modulus
 from ..errors import IdentifiabilityWarning, StabilityWarning
 from ..models.frd import FRD
-from .boundary import cap_advice, grows, warn_boundary
+from .boundary import cap_advice, grows, integrator_advice, warn_boundary
 
 __all__ = ["lines_record_length", "warn_refinement", "warn_undetermined"]
 
@@ -36,10 +36,8 @@ def warn_refinement(res: dict[str, Any], focus: str, max_iter: int, enforce: boo
             f"the refined model is unstable only marginally (largest pole modulus "
             f"{modulus(rho)}, a mode that grows by {100 * (rho ** n - 1):.2g} % over the "
             f"record's {n} samples): the record cannot tell it from an integrator (an "
-            f"integrating plant, a drift, or an offset left in the data), so the static gain "
-            f"and the step response's final value are not determined. If the plant "
-            f"integrates, identify the differenced output; if not, remove the offset and any "
-            f"drift first (sysid.detrend(data, 'linear') removes both); pass "
+            f"integrating plant, a drift, or an offset left in the data), "
+            f"{integrator_advice('identify the differenced output')}; pass "
             f"enforce_stability=True (or focus='simulation') for a stable model",
             StabilityWarning, stacklevel=level)
     elif rho >= 1.0:
