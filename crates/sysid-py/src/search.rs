@@ -261,5 +261,6 @@ pub fn search_items(
     out.set_item("geodesic", geo)?;
     out.set_item("shortened", sol.shortened)?;
     out.set_item("remaining_decrease", sol.remaining_decrease)?;
+    out.set_item("metric_switched_at", sol.metric_switched_at)?;
     Ok(())
 }

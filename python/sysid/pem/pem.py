@@ -490,6 +490,10 @@ def pem(
         residual variances; NaN for other stops) is below 1/8, half a standard deviation of
         the estimate; ``"shortened"`` counts the accepted steps the stability bound
         shortened, and when it is most of them the warning says more iterations creep there.
+        ``"metric_switched_at"``: the iteration at which the search's local coordinates
+        turned to a basis orthonormal in its own (Marquardt) metric because its steps crawled
+        while the parameters' effects spanned more than six orders of magnitude (an unstable
+        plant; ``None``: they did not).
         ``uncertainty`` holds the parameter covariance (:class:`sysid.ParameterUncertainty`), so
         that ``poles(std=True)``, ``freqresp(w, std=True)``, ``damp(std=True)`` and Bode bands
         work: the Gauss-Newton one, and with ``focus="simulation"`` (no noise model) on one
@@ -639,6 +643,7 @@ def pem(
         "stop": res["stop"],
         "geodesic": dict(res["geodesic"], on=bool(geodesic)),
         "shortened": int(res["shortened"]), "remaining_decrease": float(res["remaining_decrease"]),
+        "metric_switched_at": res.get("metric_switched_at"),
         "condition": res["condition"],
         "focus": focus,
         "weighting": weighting,

@@ -26,6 +26,15 @@
 //! is admissible. Only points that decrease the cost are accepted, so the search never
 //! diverges.
 //!
+//! A search in a provider's basis that crawls (its last five steps together took less than a
+//! quarter of the decrease its Gauss-Newton model still predicts, worth more than a residual
+//! variance) while its parameters' effects span more than six orders of magnitude changes
+//! that basis's metric from the parameters to Marquardt's
+//! ([`Problem::search_basis`], [`Solution::metric_switched_at`]); from then on a step that
+//! finds no decrease is tried again in the plain basis, and a step that would leave the
+//! admissible set is first turned along its boundary when the provider measures it
+//! ([`Problem::bound_margin`]).
+//!
 //! With [`Options::geodesic`] each damped step `v` gets the geodesic acceleration of
 //! Transtrum & Sethna (2012), `a = -(H + mu D)^-1 J^T W r_vv` with the same damped matrix and
 //! `J^T W r_vv` from [`Problem::geodesic_gradient`]; the trial is `theta + v + a/2`.
@@ -41,6 +50,7 @@
 //! a pseudo-inverse restricted to the identifiable directions, and returns the directions
 //! the data do not determine.
 
+mod boundary;
 mod covariance;
 pub(crate) mod dense;
 mod normal;
@@ -150,9 +160,16 @@ pub trait Problem {
     fn admissible(&mut self, _theta: &[f64]) -> bool {
         true
     }
-    /// An orthonormal basis (p x q) of the directions the search may move in at `theta`, or
-    /// `None` for all of them. Recomputed at every iterate.
-    fn search_basis(&mut self, _theta: &[f64]) -> Result<Option<Mat<f64>>> {
+    /// A basis (p x q) of the directions the search may move in at `theta`, or `None` for all
+    /// of them, orthonormal in the metric `diag(scale)` (`diag(scale) T` orthonormal).
+    /// Recomputed at every iterate. `scale` (p, positive) is all ones (the parameters
+    /// themselves: the similarity part of each step is then smallest in them) until the
+    /// search crawls with effects orders of magnitude apart; from then on it is the metric the search damps its steps in (`sqrt` of
+    /// the Gauss-Newton matrix's diagonal: Marquardt's scaling), which keeps that damping
+    /// what it is without the basis, where a basis orthonormal in `theta` mixes parameters
+    /// whose effects differ by orders of magnitude (an unstable plant) and the damped steps
+    /// crawl ([`Solution::metric_switched_at`]).
+    fn search_basis(&mut self, _theta: &[f64], _scale: &[f64]) -> Result<Option<Mat<f64>>> {
         Ok(None)
     }
     /// Called after each accepted step, before the Jacobian is formed there; the provider may
@@ -185,6 +202,14 @@ pub trait Problem {
     /// `None` (the default): there are none, or the provider does not say.
     fn invariant_directions(&mut self, _theta: &[f64]) -> Result<Option<Mat<f64>>> {
         Ok(None)
+    }
+    /// How far `theta` lies beyond the boundary of the admissible set ([`Problem::admissible`]):
+    /// negative inside, a continuous function of `theta` (for a state-space predictor, the
+    /// largest spectral radius the set bounds, less its limit). `None` (the default): the
+    /// provider has no such function. A step that would leave the set is then turned along
+    /// the boundary (its part along this function's gradient removed) before it is halved.
+    fn bound_margin(&mut self, _theta: &[f64]) -> Option<f64> {
+        None
     }
     /// The number of scalar residuals in the cost (for [`Options::tol_statistical`]);
     /// `None` (the default) when the provider does not say.
@@ -422,6 +447,11 @@ pub struct Solution {
     /// standard deviation. NaN for any other stop, or when the provider does not count its
     /// residuals or the point was not evaluated with its Jacobian.
     pub remaining_decrease: f64,
+    /// The iteration at which the search's local coordinates changed to a basis orthonormal
+    /// in its own (Marquardt) metric because its steps crawled while its parameters' effects
+    /// spanned more than six orders of magnitude (`None`: they did not, or the provider gives
+    /// no basis). See [`Problem::search_basis`].
+    pub metric_switched_at: Option<usize>,
 }
 
 /// What geodesic acceleration did in one search ([`Solution::geodesic`]).

@@ -43,6 +43,10 @@ pub(super) struct Reduced {
     /// The decrease (cost units) below which an eigendirection is left out of the steps
     /// ([`Options::significance`]; 0: none is).
     pub gate: f64,
+    /// Whether the provider gave a search basis (then a second metric gives other steps).
+    pub basis_given: bool,
+    /// The metric that basis is orthonormal in.
+    pub metric: Metric,
 }
 
 /// Smallest damping (relative to the largest eigenvalue) of a Cholesky solve: the similarity
@@ -50,11 +54,23 @@ pub(super) struct Reduced {
 /// gradient, so a tiny shift leaves the step in their complement.
 const CHOLESKY_FLOOR: f64 = 1e-10;
 
+/// The metric a provider's search basis is orthonormal in ([`Problem::search_basis`]).
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub(super) enum Metric {
+    /// Marquardt's scaling (the Gauss-Newton diagonal): steps of parameters whose effects
+    /// differ by orders of magnitude (an unstable plant's growing state) stay balanced.
+    Marquardt,
+    /// The parameters themselves: the similarity part of a step is the smallest in them,
+    /// which keeps a step that corrects a gain from spreading into `A` and `C`.
+    Plain,
+}
+
 pub(super) fn reduce(
     problem: &mut dyn Problem,
     opt: &Options,
     pt: &Point,
     blocked: &[bool],
+    metric_kind: Metric,
 ) -> Result<Reduced> {
     let p = pt.theta.len();
     let n_free = blocked.iter().filter(|&&b| !b).count();
@@ -63,9 +79,25 @@ pub(super) fn reduce(
         return Ok(reduce_cholesky(pt, blocked));
     }
     let t0 = std::time::Instant::now();
-    let basis = problem.search_basis(&pt.theta)?;
+    // Marquardt's metric (the full-space scaling of the Cholesky path) for the basis
+    let metric: Vec<f64> = (0..p)
+        .map(|i| {
+            let v = pt.h[(i, i)];
+            if v > 0.0 && v.is_finite() {
+                v.sqrt()
+            } else {
+                1.0
+            }
+        })
+        .collect();
+    let metric = match metric_kind {
+        Metric::Marquardt => metric,
+        Metric::Plain => vec![1.0; p],
+    };
+    let basis = problem.search_basis(&pt.theta, &metric)?;
     prof("basis", t0);
     let t0 = std::time::Instant::now();
+    let basis_given = basis.is_some();
     let mut t = match basis {
         Some(b) => {
             if b.nrows() != p {
@@ -81,10 +113,18 @@ pub(super) fn reduce(
             Mat::from_fn(p, free.len(), |i, j| f64::from(u8::from(free[j] == i)))
         }
     };
-    // Blocked parameters (fixed or at an active bound) never move, whatever the basis says.
-    if blocked.iter().any(|&b| b) {
+    // Blocked parameters (fixed or at an active bound) never move, whatever the basis says;
+    // in Marquardt's metric nor do those the cost does not see at this point (a zero column
+    // of the Jacobian: a mode with B = C = 0 exactly), which such a basis would otherwise move
+    // by rounding, to values the rank of the Gauss-Newton matrix no longer shows as idle.
+    let idle: Vec<bool> = (0..p)
+        .map(|i| {
+            blocked[i] || (basis_given && metric_kind == Metric::Marquardt && pt.h[(i, i)] == 0.0)
+        })
+        .collect();
+    if idle.iter().any(|&b| b) {
         for i in 0..p {
-            if blocked[i] {
+            if idle[i] {
                 for j in 0..t.ncols() {
                     t[(i, j)] = 0.0;
                 }
@@ -157,6 +197,8 @@ pub(super) fn reduce(
         at: pt.theta.clone(),
         orbit: None,
         gate,
+        basis_given,
+        metric: metric_kind,
     };
     red.set_gradient(&pt.g);
     Ok(red)
@@ -216,6 +258,8 @@ fn reduce_cholesky(pt: &Point, blocked: &[bool]) -> Reduced {
         at: pt.theta.clone(),
         orbit: None,
         gate: 0.0,
+        basis_given: false,
+        metric: Metric::Plain,
     };
     red.set_gradient(&pt.g);
     prof("reduce-cholesky", t0);
@@ -289,12 +333,24 @@ impl Reduced {
     /// (`|D z|` with `s = T z`).
     pub(super) fn scaled_norm(&self, s: &[f64]) -> f64 {
         let sq: f64 = match &self.solver {
-            Solver::Eigen { t, .. } => (0..t.ncols())
+            Solver::Eigen { t, .. } if self.metric == Metric::Plain => (0..t.ncols())
                 .map(|j| {
                     let z: f64 = (0..t.nrows()).map(|i| t[(i, j)] * s[i]).sum();
                     (self.d[j] * z).powi(2)
                 })
                 .sum(),
+            Solver::Eigen { t, .. } => {
+                // z with s = T z: the basis is orthonormal in the problem's metric, not in
+                // theta, so z solves the normal equations of T
+                let q = t.ncols();
+                let ts = t.transpose() * Mat::from_fn(s.len(), 1, |i, _| s[i]);
+                let gram = t.transpose() * t;
+                let z = match gram.llt(Side::Lower) {
+                    Ok(f) => f.solve(&ts),
+                    Err(_) => return f64::NAN,
+                };
+                (0..q).map(|j| (self.d[j] * z[(j, 0)]).powi(2)).sum()
+            }
             Solver::Cholesky { .. } => (0..s.len())
                 .filter(|&i| !self.blocked[i])
                 .map(|i| (self.d[i] * s[i]).powi(2))

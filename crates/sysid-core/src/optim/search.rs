@@ -1,6 +1,7 @@
 //! The damped Gauss-Newton iteration of [`minimize`].
 
-use super::reduced::{reduce, Reduced, Solver};
+use super::boundary::{shape, Shaped};
+use super::reduced::{reduce, Metric, Reduced, Solver};
 use super::{Evaluation, Flow, GeodesicCounts, Iteration, Options, Problem, Solution, StopReason};
 use crate::error::{Result, SysidError};
 use faer::Mat;
@@ -191,7 +192,7 @@ fn evaluate_point(
     })
 }
 
-fn project(opt: &Options, theta: &mut [f64]) {
+pub(super) fn project(opt: &Options, theta: &mut [f64]) {
     if let Some(lo) = &opt.lower {
         for (t, l) in theta.iter_mut().zip(lo) {
             *t = t.max(*l);
@@ -287,6 +288,13 @@ pub fn minimize(
     // consecutive iterations whose Gauss-Newton matrix is reused from an earlier point
     let mut frozen = 0usize;
     let mut last_red: Option<Reduced> = None;
+    // the same step problem in the plain metric's basis (a provider's basis, small problems)
+    let mut last_alt: Option<Reduced> = None;
+    // the metric of a provider's basis: plain until the search crawls (see `CRAWL_WINDOW`)
+    let mut metric = Metric::Plain;
+    let mut switched_at: Option<usize> = None;
+    // the decrease of each accepted step (weighted cost)
+    let mut gains: Vec<f64> = Vec::new();
     let mut geo = GeodesicCounts::default();
     let mut shortened = 0usize;
     let mut remaining = f64::NAN;
@@ -332,8 +340,11 @@ pub fn minimize(
                 }
                 r
             }
-            _ => match reduce(problem, options, &pt, &blocked) {
-                Ok(r) => r,
+            _ => match reduce(problem, options, &pt, &blocked, metric) {
+                Ok(r) => {
+                    last_alt = None;
+                    r
+                }
                 // the tests at the cap are a courtesy: a failure there ends as before
                 Err(_) if capped => {
                     stop = StopReason::MaxIterations;
@@ -342,6 +353,19 @@ pub fn minimize(
                 Err(e) => return Err(e),
             },
         };
+        if stale {
+            if let Some(alt) = last_alt.as_mut().filter(|a| a.blocked == blocked) {
+                alt.set_gradient(&pt.g);
+            } else {
+                last_alt = None;
+            }
+        } else if !capped
+            && metric == Metric::Marquardt
+            && red.basis_given
+            && matches!(red.solver, Solver::Eigen { .. })
+        {
+            last_alt = reduce(problem, options, &pt, &blocked, Metric::Plain).ok();
+        }
         let red = &*last_red.insert(red);
         condition = red.condition;
         let gnorm = red
@@ -377,6 +401,15 @@ pub fn minimize(
         if !stale && sigma2.is_some_and(|s2| dec <= options.tol_statistical * s2) {
             stop = StopReason::Statistical;
             break;
+        }
+        if crawls(red, metric, stale, &gains, dec, sigma2) && spread(&pt, &blocked) > SPREAD {
+            // the steps take a small part of what the Gauss-Newton model says is left, and
+            // the parameters' effects differ by orders of magnitude: the plain basis mixes
+            // them; from here on the basis is orthonormal in the search's own metric
+            metric = Metric::Marquardt;
+            switched_at = Some(iterations);
+            last_red = None;
+            continue;
         }
         if capped {
             // how far short of the minimum it stops: the exact decrease (solved here when
@@ -433,31 +466,43 @@ pub fn minimize(
                 Some(a) => (0..p).map(|i| v[i] + 0.5 * a[i]).collect(),
                 None => v.clone(),
             };
-            let mut alpha = 1.0;
-            let mut trial: Vec<f64> = (0..p).map(|i| pt.theta[i] + s[i]).collect();
-            project(options, &mut trial);
-            let mut ok = problem.admissible(&trial);
-            let mut halvings = 0;
-            while !ok && halvings < 30 {
-                alpha *= 0.5;
-                halvings += 1;
-                trial = (0..p).map(|i| pt.theta[i] + alpha * s[i]).collect();
-                project(options, &mut trial);
-                ok = problem.admissible(&trial);
+            // a step that finds no decrease is tried again in the plain metric's basis (the
+            // same Gauss-Newton step up to its similarity part, which the Marquardt metric
+            // spreads into parameters of small effect: a gain error corrected through `A`
+            // and `C`, or, noise-free, only linear convergence) before the damping is raised
+            let turn = accel.is_none() && metric == Metric::Marquardt;
+            let mut best: Option<(Shaped, f64)> = None;
+            if let Some(sh) = shape(problem, options, &pt, s, &blocked, turn) {
+                let c = trial_cost(problem, options, &sh.trial, &mut evals)?;
+                best = Some((sh, c));
             }
-            if !ok {
+            let descends = best.as_ref().is_some_and(|(_, c)| *c < pt.cost);
+            if let (Some(alt), None, false) = (&last_alt, &accel, descends) {
+                let other = alt.step(mu, options.rank_tol);
+                if let Some(sh) = shape(problem, options, &pt, other, &blocked, turn) {
+                    let c = trial_cost(problem, options, &sh.trial, &mut evals)?;
+                    if c.is_finite() && best.as_ref().is_none_or(|(_, b)| !b.is_finite() || c < *b)
+                    {
+                        best = Some((sh, c));
+                    }
+                }
+            }
+            let Some((
+                Shaped {
+                    trial,
+                    alpha,
+                    halvings,
+                    turned: turned_step,
+                },
+                cand_cost,
+            )) = best
+            else {
                 if !stale {
                     mu = (mu * 10.0).max(1e-6);
                 }
                 continue;
-            }
+            };
             // the trial is judged on its cost alone; the Jacobian is formed once accepted
-            evals += 1;
-            let t0 = std::time::Instant::now();
-            crate::interrupt::check()?;
-            let raw = problem.evaluate(&trial, false)?;
-            prof("cost", t0);
-            let cand_cost = regularise(options, &trial, &raw).0;
             let actual = pt.cost - cand_cost;
             if cand_cost.is_finite() && actual > 0.0 {
                 // predicted decrease of the (projected) step taken; with an acceleration,
@@ -466,13 +511,8 @@ pub fn minimize(
                     Some(_) => v.iter().map(|x| alpha * x).collect(),
                     None => (0..p).map(|i| trial[i] - pt.theta[i]).collect(),
                 };
-                let mut quad = 0.0;
-                for i in 0..p {
-                    let hs: f64 = (0..p).map(|j| pt.h[(i, j)] * st[j]).sum();
-                    quad += st[i] * hs;
-                }
-                let lin: f64 = (0..p).map(|i| pt.g[i] * st[i]).sum();
-                let pred = -(lin + 0.5 * quad);
+                let quad = curvature(&pt, &st);
+                let pred = predicted(&pt, &st);
                 let rho = if pred > 0.0 { actual / pred } else { 0.0 };
                 let used = mu;
                 // the damping follows the Gauss-Newton model, not a reused one
@@ -485,7 +525,7 @@ pub fn minimize(
                     eprintln!("PROF step mu {used:e} rho {rho} pred {pred:e} actual {actual:e} try {try_} halvings {halvings}");
                 }
                 accepted = Some((trial, cand_cost, used, rho, quad, accel.is_some()));
-                cut = halvings > 0;
+                cut = halvings > 0 || turned_step;
                 break;
             }
             if std::env::var_os("SYSID_PROFILE").is_some() {
@@ -511,6 +551,7 @@ pub fn minimize(
         let step_norm = norm(&(0..p).map(|i| trial[i] - pt.theta[i]).collect::<Vec<_>>());
         // relative decrease under the same cost definition (before any re-weighting)
         let rel_decrease = (pt.cost - cand_cost) / pt.cost.abs().max(f64::MIN_POSITIVE);
+        gains.push(pt.cost - cand_cost);
         iterations += 1;
         let t0 = std::time::Instant::now();
         problem.accepted(&trial)?;
@@ -638,5 +679,90 @@ pub fn minimize(
         geodesic: geo,
         shortened,
         remaining_decrease: remaining,
+        metric_switched_at: switched_at,
     })
+}
+
+/// Accepted steps over which a crawl is judged ([`crawls`]).
+const CRAWL_WINDOW: usize = 5;
+/// A crawl: the last [`CRAWL_WINDOW`] steps together took less than this fraction of the
+/// decrease the Gauss-Newton model says is still to go.
+const CRAWL_FRACTION: f64 = 0.25;
+
+/// Whether a search in a provider's basis, orthonormal in the parameters themselves, crawls:
+/// its last [`CRAWL_WINDOW`] accepted steps took less than [`CRAWL_FRACTION`] of the decrease
+/// `dec` its Gauss-Newton model predicts, while that decrease is worth more than a residual
+/// variance (`sigma2`). On an unstable plant the parameters' effects differ by orders of
+/// magnitude ([`spread`]), a basis orthonormal in them mixes them, and the damped steps crawl
+/// (the search stopped at its cap short of the minimum by several residual variances); in
+/// the search's own metric it converges. The switch is made only then: on the searches that
+/// converge without it, the plain basis keeps the similarity part of each step smallest in
+/// the parameters, and their ends do not move.
+fn crawls(
+    red: &Reduced,
+    metric: Metric,
+    stale: bool,
+    gains: &[f64],
+    dec: f64,
+    sigma2: Option<f64>,
+) -> bool {
+    if metric != Metric::Plain || stale || !red.basis_given || gains.len() < CRAWL_WINDOW {
+        return false;
+    }
+    let Some(s2) = sigma2 else {
+        return false;
+    };
+    let recent: f64 = gains[gains.len() - CRAWL_WINDOW..].iter().sum();
+    dec > s2 && recent < CRAWL_FRACTION * dec
+}
+
+/// The spread of the parameters' effects above which a crawling search changes its metric
+/// ([`spread`]): six orders of magnitude. Measured where the crawl test fires: 1e6 to 4e12
+/// on unstable plants (the warning audit's scenario), where the plain basis stopped searches
+/// at their cap; 8e1 to 6e4 on the shipped records' fits and 3e5 on an aircraft's
+/// ground-vibration record, where a switch moved searches into other local minima, worse on
+/// validation data as often as better (`benches/results/pem_search.md`).
+const SPREAD: f64 = 1e6;
+
+/// The largest over the smallest square root of the Gauss-Newton diagonal (Marquardt's
+/// scale) among the parameters that move and that the cost sees.
+fn spread(pt: &Point, blocked: &[bool]) -> f64 {
+    let (lo, hi) = (0..blocked.len())
+        .filter(|&i| !blocked[i] && pt.h[(i, i)] > 0.0 && pt.h[(i, i)].is_finite())
+        .map(|i| pt.h[(i, i)].sqrt())
+        .fold((f64::INFINITY, 0.0f64), |(a, b), x| (a.min(x), b.max(x)));
+    if lo.is_finite() {
+        hi / lo
+    } else {
+        1.0
+    }
+}
+
+/// `st^T H st` at `pt`.
+fn curvature(pt: &Point, st: &[f64]) -> f64 {
+    let p = st.len();
+    (0..p)
+        .map(|i| st[i] * (0..p).map(|j| pt.h[(i, j)] * st[j]).sum::<f64>())
+        .sum()
+}
+
+/// The Gauss-Newton model's decrease along the step `st` from `pt`.
+fn predicted(pt: &Point, st: &[f64]) -> f64 {
+    let lin: f64 = (0..st.len()).map(|i| pt.g[i] * st[i]).sum();
+    -(lin + 0.5 * curvature(pt, st))
+}
+
+/// The cost of a trial point (no Jacobian), counted as an evaluation.
+fn trial_cost(
+    problem: &mut dyn Problem,
+    options: &Options,
+    trial: &[f64],
+    evals: &mut usize,
+) -> Result<f64> {
+    *evals += 1;
+    let t0 = std::time::Instant::now();
+    crate::interrupt::check()?;
+    let raw = problem.evaluate(trial, false)?;
+    prof("cost", t0);
+    Ok(regularise(options, trial, &raw).0)
 }

@@ -373,6 +373,121 @@ fn a_search_that_converges_on_its_last_allowed_iteration_says_so() {
     assert_eq!(capped.evaluations, free.evaluations);
 }
 
+/// Least squares whose minimum (2, 0.5) lies outside the unit disc, the admissible set, with
+/// effects `k` apart, in a provider's basis (all directions: the search's crawl test
+/// applies); with `margin`, the provider measures the disc's boundary (`|theta| - 1`).
+struct Disc {
+    margin: bool,
+    /// The second residual's weight.
+    k: f64,
+}
+
+/// [`Disc`]'s weight: effects seven orders of magnitude apart.
+const DISC_K: f64 = 1e7;
+
+impl Problem for Disc {
+    fn n_params(&self) -> usize {
+        2
+    }
+    fn evaluate(&mut self, t: &[f64], jac: bool) -> crate::Result<Evaluation> {
+        let r = [t[0] - 2.0, self.k * (t[1] - 0.5)];
+        let mut ev = Evaluation::cost_only(0.5 * (r[0] * r[0] + r[1] * r[1]));
+        if jac {
+            ev.gradient = vec![r[0], self.k * r[1]];
+            ev.gauss_newton = Mat::from_fn(2, 2, |a, b| match (a, b) {
+                (0, 0) => 1.0,
+                (1, 1) => self.k * self.k,
+                _ => 0.0,
+            });
+        }
+        Ok(ev)
+    }
+    fn admissible(&mut self, t: &[f64]) -> bool {
+        t[0].hypot(t[1]) < 1.0
+    }
+    fn bound_margin(&mut self, t: &[f64]) -> Option<f64> {
+        self.margin.then(|| t[0].hypot(t[1]) - 1.0)
+    }
+    fn search_basis(&mut self, _t: &[f64], scale: &[f64]) -> crate::Result<Option<Mat<f64>>> {
+        // every direction, orthonormal in the metric `diag(scale)`
+        Ok(Some(Mat::from_fn(2, 2, |i, j| {
+            if i == j {
+                1.0 / scale[i]
+            } else {
+                0.0
+            }
+        })))
+    }
+    fn n_residuals(&self) -> Option<usize> {
+        // residual variances far below the cost left at the boundary
+        Some(1000)
+    }
+}
+
+#[test]
+fn a_search_that_crawls_along_the_admissible_sets_boundary_slides_along_it() {
+    // halving alone keeps each step's direction: the search creeps along the circle towards
+    // the constrained minimum (where the gradient points into the disc, normal to the
+    // circle); once it crawls, its steps are turned along the boundary and it gets there
+    let o = Options {
+        max_iter: 30,
+        tol_cost: 0.0,
+        ..Options::default()
+    };
+    let turned = go(
+        &mut Disc {
+            margin: true,
+            k: DISC_K,
+        },
+        &[0.0, 0.0],
+        &o,
+    );
+    let halved = go(
+        &mut Disc {
+            margin: false,
+            k: DISC_K,
+        },
+        &[0.0, 0.0],
+        &o,
+    );
+    eprintln!(
+        "turned {:?} {} {:?} {:?} halved {:?} {} {:?}",
+        turned.theta,
+        turned.iterations,
+        turned.stop,
+        turned.metric_switched_at,
+        halved.theta,
+        halved.iterations,
+        halved.stop
+    );
+    // the constrained infimum: y = 1/2 (the heavy residual zero), x = sqrt(3)/2 on the circle
+    let best = 0.5 * (0.75f64.sqrt() - 2.0).powi(2);
+    assert!(turned.metric_switched_at.is_some());
+    assert!(turned.theta[0].hypot(turned.theta[1]) > 1.0 - 1e-6);
+    assert!(
+        turned.cost < best * (1.0 + 1e-6),
+        "{} {:?}",
+        turned.cost,
+        turned.theta
+    );
+    assert!(
+        halved.cost > 10.0 * best,
+        "{} {:?}",
+        halved.cost,
+        halved.theta
+    );
+    // effects of similar size (a factor 10): the same crawl keeps the plain basis
+    let even = go(
+        &mut Disc {
+            margin: true,
+            k: 10.0,
+        },
+        &[0.0, 0.0],
+        &o,
+    );
+    assert!(even.metric_switched_at.is_none());
+}
+
 #[test]
 fn search_basis_restricts_the_step() {
     // Only move along (1, 1)/sqrt2: the solution is the best point on that line.
@@ -384,7 +499,7 @@ fn search_basis_restricts_the_step() {
         fn evaluate(&mut self, t: &[f64], j: bool) -> crate::Result<Evaluation> {
             self.0.evaluate(t, j)
         }
-        fn search_basis(&mut self, _t: &[f64]) -> crate::Result<Option<Mat<f64>>> {
+        fn search_basis(&mut self, _t: &[f64], _s: &[f64]) -> crate::Result<Option<Mat<f64>>> {
             let s = 0.5f64.sqrt();
             Ok(Some(Mat::from_fn(3, 1, |i, _| if i < 2 { s } else { 0.0 })))
         }

@@ -3,7 +3,12 @@
 //! A fully parameterised model is only determined up to a change of state basis. The tangent
 //! space of the similarity orbit `{(T^-1 A T, T^-1 B, C T, D, T^-1 K, T^-1 x0)}` at `theta`
 //! is spanned, for `T = I + X` with `X = E_ab`, by `(A X - X A, -X B, C X, 0, -X K, -X x0)`.
-//! The search moves in its orthogonal complement. This is exact when every quantity the
+//! The search moves in its orthogonal complement, orthogonal in the metric the search asks
+//! for: the parameters themselves, or, once its steps crawl, the metric it damps them in
+//! (each parameter scaled by its Gauss-Newton diagonal), because in the parameters a basis
+//! mixes parameters whose effects differ by orders of magnitude (the state of an unstable
+//! plant grows with its outputs) and the damped steps crawl, short of the minimum at the
+//! iteration cap ([`crate::optim::Problem::search_basis`]). This is exact when every quantity the
 //! similarity moves is a parameter or zero; with a fixed non-zero `K` or a given non-zero `x0`
 //! there is no orbit in the parameters and the search uses all directions. In the modal chart
 //! ([`super::chart`]) the orbit is that of the similarities that keep the chart's blocks, and
@@ -97,9 +102,10 @@ impl Predictor<'_> {
         Some(tan)
     }
 
-    /// An orthonormal basis of the complement of the orbit's tangent space at `theta`, or
-    /// `None` when local coordinates are off or there is no orbit.
-    pub(super) fn local_basis(&self, th: &[f64]) -> Result<Option<Mat<f64>>> {
+    /// A basis of the complement of the orbit's tangent space at `theta`, orthonormal in the
+    /// metric `diag(scale)` ([`crate::optim::Problem::search_basis`]), or `None` when local
+    /// coordinates are off or there is no orbit.
+    pub(super) fn local_basis(&self, th: &[f64], scale: &[f64]) -> Result<Option<Mat<f64>>> {
         let Some(tan) = self.local.then(|| self.orbit_tangent(th)).flatten() else {
             return Ok(None);
         };
@@ -107,7 +113,8 @@ impl Predictor<'_> {
         let mask = self.chart_mask();
         let free: Vec<usize> = (0..self.p).filter(|&i| !mask[i]).collect();
         let tf = Mat::from_fn(free.len(), tan.ncols(), |i, j| tan[(free[i], j)]);
-        let u = complement(&tf)?;
+        let sf: Vec<f64> = free.iter().map(|&i| scale[i]).collect();
+        let u = scaled_complement(&tf, &sf)?;
         let mut basis = Mat::<f64>::zeros(self.p, u.ncols());
         for (i, &fi) in free.iter().enumerate() {
             for j in 0..u.ncols() {
@@ -118,25 +125,65 @@ impl Predictor<'_> {
     }
 }
 
-/// An orthonormal basis of the orthogonal complement of the column space of `tan` (its
-/// numerical rank: singular values above `1e-10` of the largest). A small SVD (every
-/// iterate of winding-sized problems) runs on the calling thread: waking the pool cost more
-/// than the decomposition.
-pub(super) fn complement(tan: &Mat<f64>) -> Result<Mat<f64>> {
+/// A basis `T` of the complement of the column space of `tan` in the metric `diag(scale)`:
+/// `diag(scale) T` is an orthonormal basis of the orthogonal complement of `diag(scale) tan`.
+/// A scale that is not positive and finite counts as 1. The number of directions follows
+/// the rank of `tan` itself (singular values above `1e-10` of the largest): a metric whose
+/// entries differ by orders of magnitude must not make the orbit look smaller than it is.
+pub(super) fn scaled_complement(tan: &Mat<f64>, scale: &[f64]) -> Result<Mat<f64>> {
+    let s: Vec<f64> = (0..tan.nrows())
+        .map(|i| match scale.get(i) {
+            Some(&v) if v > 0.0 && v.is_finite() => v,
+            _ => 1.0,
+        })
+        .collect();
+    let (u, rank) = if s.iter().all(|&v| v == 1.0) {
+        // the plain metric: one decomposition gives both
+        let (u, sv) = left_svd(tan, true)?;
+        (u, numerical_rank(&sv))
+    } else {
+        let (_, sv) = left_svd(tan, false)?;
+        let ts = Mat::from_fn(tan.nrows(), tan.ncols(), |i, j| s[i] * tan[(i, j)]);
+        (left_svd(&ts, true)?.0, numerical_rank(&sv))
+    };
+    let rows = tan.nrows();
+    Ok(Mat::from_fn(rows, rows - rank, |i, j| {
+        u[(i, rank + j)] / s[i]
+    }))
+}
+
+/// Singular values above `1e-10` of the largest.
+fn numerical_rank(sv: &[f64]) -> usize {
+    let smax = sv.first().copied().unwrap_or(0.0);
+    sv.iter().filter(|&&v| v > 1e-10 * smax && v > 0.0).count()
+}
+
+/// The singular values of `tan` (descending) and, with `vectors`, its full left singular
+/// vectors (rows x rows; empty otherwise). A small SVD (every iterate of winding-sized
+/// problems) runs on the calling thread: waking the pool cost more than the decomposition.
+fn left_svd(tan: &Mat<f64>, vectors: bool) -> Result<(Mat<f64>, Vec<f64>)> {
     use faer::dyn_stack::{MemBuffer, MemStack};
     use faer::linalg::svd::{self, ComputeSvdVectors};
     let (rows, cols) = tan.shape();
     let size = rows.min(cols);
     let par = crate::optim::small_par(rows, cols);
-    let mut u = Mat::<f64>::zeros(rows, rows);
+    let mut u = Mat::<f64>::zeros(
+        if vectors { rows } else { 0 },
+        if vectors { rows } else { 0 },
+    );
     let mut s = faer::diag::Diag::<f64>::zeros(size);
     // the right singular vectors are not needed
-    let (full, none) = (ComputeSvdVectors::Full, ComputeSvdVectors::No);
-    let scratch = svd::svd_scratch::<f64>(rows, cols, full, none, par, Default::default());
+    let left = if vectors {
+        ComputeSvdVectors::Full
+    } else {
+        ComputeSvdVectors::No
+    };
+    let none = ComputeSvdVectors::No;
+    let scratch = svd::svd_scratch::<f64>(rows, cols, left, none, par, Default::default());
     svd::svd(
         tan.as_ref(),
         s.as_mut(),
-        Some(u.as_mut()),
+        vectors.then_some(u.as_mut()),
         None,
         par,
         MemStack::new(&mut MemBuffer::new(scratch)),
@@ -144,9 +191,5 @@ pub(super) fn complement(tan: &Mat<f64>) -> Result<Mat<f64>> {
     )
     .map_err(|e| SysidError::numerical("local coordinates (SVD)", format!("{e:?}")))?;
     let sv = s.column_vector();
-    let smax = if size > 0 { sv[0] } else { 0.0 };
-    let rank = (0..size)
-        .filter(|&i| sv[i] > 1e-10 * smax && sv[i] > 0.0)
-        .count();
-    Ok(u.subcols(rank, rows - rank).to_owned())
+    Ok((u, (0..size).map(|i| sv[i]).collect()))
 }

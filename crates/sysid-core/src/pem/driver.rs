@@ -55,8 +55,12 @@ impl Problem for Predictor<'_> {
         self.is_admissible(th)
     }
 
-    fn search_basis(&mut self, th: &[f64]) -> Result<Option<Mat<f64>>> {
-        self.local_basis(th)
+    fn bound_margin(&mut self, th: &[f64]) -> Option<f64> {
+        self.margin(th)
+    }
+
+    fn search_basis(&mut self, th: &[f64], scale: &[f64]) -> Result<Option<Mat<f64>>> {
+        self.local_basis(th, scale)
     }
 
     fn invariant_directions(&mut self, th: &[f64]) -> Result<Option<Mat<f64>>> {
@@ -474,6 +478,9 @@ fn merge(first: optim::Solution, mut second: optim::Solution) -> optim::Solution
     second.iterations += first.iterations;
     second.evaluations += first.evaluations;
     second.shortened += first.shortened;
+    second.metric_switched_at = first
+        .metric_switched_at
+        .or(second.metric_switched_at.map(|k| k + first.iterations));
     second
 }
 

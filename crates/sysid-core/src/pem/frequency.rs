@@ -30,7 +30,7 @@
 //! coordinates of [`super::coordinates`]). Without a well-conditioned modal form the whole of
 //! `A` is one block. The admissible set is a stable `A`.
 
-use super::coordinates::{complement, similarity_tangent, Part};
+use super::coordinates::{scaled_complement, similarity_tangent, Part};
 use super::modal::modal_form;
 use crate::error::{Result, SysidError};
 use crate::linalg::spectral_radius;
@@ -343,11 +343,11 @@ impl Problem for LineFit<'_> {
         matches!(spectral_radius(a.as_ref()), Ok(r) if r < 1.0)
     }
 
-    fn search_basis(&mut self, th: &[f64]) -> Result<Option<Mat<f64>>> {
+    fn search_basis(&mut self, th: &[f64], scale: &[f64]) -> Result<Option<Mat<f64>>> {
         if !self.orbit {
             return Ok(None);
         }
-        complement(&self.orbit_tangent(th)).map(Some)
+        scaled_complement(&self.orbit_tangent(th), scale).map(Some)
     }
 
     fn invariant_directions(&mut self, th: &[f64]) -> Result<Option<Mat<f64>>> {

@@ -675,6 +675,22 @@ impl<'a> Predictor<'a> {
         false
     }
 
+    /// How far the spectral radii the admissible set bounds (the predictor's `A - K C`, and
+    /// `A` with the stability bound) exceed its limit: the larger of the two differences
+    /// (`None` when nothing is bounded or an eigenvalue solve fails).
+    pub(super) fn margin(&mut self, th: &[f64]) -> Option<f64> {
+        if !self.radius_limit.is_finite() {
+            return None;
+        }
+        let pm = self.unpack(th);
+        let abar = &pm.a - crate::linalg::mul(pm.k.as_ref(), pm.c.as_ref());
+        let mut m = crate::linalg::spectral_radius(abar.as_ref()).ok()? - self.radius_limit;
+        if self.enforce_stability {
+            m = m.max(crate::linalg::spectral_radius(pm.a.as_ref()).ok()? - self.radius_limit);
+        }
+        m.is_finite().then_some(m)
+    }
+
     /// Admit poles on the unit circle (to [`MARGINAL_RADIUS`]) from now on: a grey box whose
     /// start has a structural integrator.
     pub(crate) fn set_marginal(&mut self) {

@@ -352,10 +352,36 @@ fn local_coordinates_and_gradient_check() {
         );
     }
     // the basis is orthogonal to the similarity directions and has p - n^2 columns
-    let q = pr.search_basis(&th).unwrap().unwrap();
+    let q = pr.search_basis(&th, &vec![1.0; th.len()]).unwrap().unwrap();
     assert_eq!(q.ncols(), th.len() - 9);
     // the similarity directions are a null space of J^T W J and orthogonal to the gradient
     let tan = pr.orbit_tangent(&th).unwrap();
+    // in the search's metric (here the Marquardt scaling, spread over orders of magnitude):
+    // diag(s) T orthonormal and orthogonal to diag(s) tan, the same number of directions
+    let s: Vec<f64> = (0..th.len())
+        .map(|i| ev.gauss_newton[(i, i)].max(0.0).sqrt().max(1e-3) * 10f64.powi(i as i32 % 7))
+        .collect();
+    let qs = pr.search_basis(&th, &s).unwrap().unwrap();
+    assert_eq!(qs.ncols(), q.ncols());
+    let sq = Mat::from_fn(qs.nrows(), qs.ncols(), |i, j| s[i] * qs[(i, j)]);
+    let st = Mat::from_fn(tan.nrows(), tan.ncols(), |i, j| s[i] * tan[(i, j)]);
+    let gram = sq.transpose() * &sq;
+    for a in 0..gram.nrows() {
+        for b in 0..gram.ncols() {
+            let e = f64::from(u8::from(a == b));
+            assert!(
+                (gram[(a, b)] - e).abs() < 1e-10,
+                "({a}, {b}): {}",
+                gram[(a, b)]
+            );
+        }
+    }
+    let cross = sq.transpose() * &st;
+    assert!(
+        cross.norm_max() < 1e-9 * st.norm_max(),
+        "{}",
+        cross.norm_max()
+    );
     let ht = &ev.gauss_newton * &tan;
     let scale = ev.gauss_newton.norm_max() * tan.norm_max();
     eprintln!("H tan {} of {scale}", ht.norm_max());
@@ -663,7 +689,7 @@ fn modal_chart_gauss_newton_equals_the_plain_one() {
                 .fold(0.0, f64::max);
             assert!(hv < 1e-10 * scale, "{hv}");
         }
-        let basis = pr.local_basis(&th).unwrap().unwrap();
+        let basis = pr.local_basis(&th, &vec![1.0; th.len()]).unwrap().unwrap();
         assert_eq!(
             basis.ncols(),
             pr.p - held.iter().filter(|&&h| h).count() - 13
