@@ -69,14 +69,7 @@ fn along_boundary(
     }
     // the metric's inverse square: 1 / H_ii (1 where the diagonal is not positive)
     let w: Vec<f64> = (0..p)
-        .map(|i| {
-            let v = pt.h[(i, i)];
-            if v > 0.0 && v.is_finite() {
-                1.0 / v
-            } else {
-                1.0
-            }
-        })
+        .map(|i| pt.diagonal(i).map_or(1.0, |v| 1.0 / v))
         .collect();
     let cs: f64 = (0..p).map(|i| c[i] * step[i]).sum();
     let cwc: f64 = (0..p).map(|i| c[i] * w[i] * c[i]).sum();
@@ -161,8 +154,6 @@ pub(super) fn shape(
             }
             if ok {
                 step = back;
-            } else {
-                trial = at(&step, 1.0);
             }
         }
     }

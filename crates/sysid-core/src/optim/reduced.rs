@@ -79,19 +79,11 @@ pub(super) fn reduce(
         return Ok(reduce_cholesky(pt, blocked));
     }
     let t0 = std::time::Instant::now();
-    // Marquardt's metric (the full-space scaling of the Cholesky path) for the basis
-    let metric: Vec<f64> = (0..p)
-        .map(|i| {
-            let v = pt.h[(i, i)];
-            if v > 0.0 && v.is_finite() {
-                v.sqrt()
-            } else {
-                1.0
-            }
-        })
-        .collect();
-    let metric = match metric_kind {
-        Metric::Marquardt => metric,
+    // the basis's metric: Marquardt's is the full-space scaling of the Cholesky path
+    let metric: Vec<f64> = match metric_kind {
+        Metric::Marquardt => (0..p)
+            .map(|i| pt.diagonal(i).map_or(1.0, f64::sqrt))
+            .collect(),
         Metric::Plain => vec![1.0; p],
     };
     let basis = problem.search_basis(&pt.theta, &metric)?;
@@ -221,12 +213,9 @@ fn reduce_cholesky(pt: &Point, blocked: &[bool]) -> Reduced {
     let p = pt.theta.len();
     let d: Vec<f64> = (0..p)
         .map(|i| {
-            let v = pt.h[(i, i)];
-            if v > 0.0 && v.is_finite() && !blocked[i] {
-                v.sqrt()
-            } else {
-                1.0
-            }
+            pt.diagonal(i)
+                .filter(|_| !blocked[i])
+                .map_or(1.0, f64::sqrt)
         })
         .collect();
     let hs = Mat::from_fn(p, p, |i, j| {

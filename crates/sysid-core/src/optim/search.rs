@@ -16,6 +16,15 @@ pub(super) struct Point {
     pub h: Mat<f64>,
 }
 
+impl Point {
+    /// The Gauss-Newton diagonal's entry `i` when it is positive and finite (the square of
+    /// Marquardt's scale of parameter `i`), else `None`.
+    pub(super) fn diagonal(&self, i: usize) -> Option<f64> {
+        let v = self.h[(i, i)];
+        (v > 0.0 && v.is_finite()).then_some(v)
+    }
+}
+
 /// Copies of the `p x p` normal equations a search holds at once: the evaluated point's and a
 /// trial point's `J^T J`, the regularised and the reduced matrices, the eigenvectors and the
 /// Cholesky factor.
@@ -512,7 +521,8 @@ pub fn minimize(
                     None => (0..p).map(|i| trial[i] - pt.theta[i]).collect(),
                 };
                 let quad = curvature(&pt, &st);
-                let pred = predicted(&pt, &st);
+                let lin: f64 = (0..p).map(|i| pt.g[i] * st[i]).sum();
+                let pred = -(lin + 0.5 * quad);
                 let rho = if pred > 0.0 { actual / pred } else { 0.0 };
                 let used = mu;
                 // the damping follows the Gauss-Newton model, not a reused one
@@ -728,8 +738,8 @@ const SPREAD: f64 = 1e6;
 /// scale) among the parameters that move and that the cost sees.
 fn spread(pt: &Point, blocked: &[bool]) -> f64 {
     let (lo, hi) = (0..blocked.len())
-        .filter(|&i| !blocked[i] && pt.h[(i, i)] > 0.0 && pt.h[(i, i)].is_finite())
-        .map(|i| pt.h[(i, i)].sqrt())
+        .filter(|&i| !blocked[i])
+        .filter_map(|i| pt.diagonal(i).map(f64::sqrt))
         .fold((f64::INFINITY, 0.0f64), |(a, b), x| (a.min(x), b.max(x)));
     if lo.is_finite() {
         hi / lo
@@ -744,12 +754,6 @@ fn curvature(pt: &Point, st: &[f64]) -> f64 {
     (0..p)
         .map(|i| st[i] * (0..p).map(|j| pt.h[(i, j)] * st[j]).sum::<f64>())
         .sum()
-}
-
-/// The Gauss-Newton model's decrease along the step `st` from `pt`.
-fn predicted(pt: &Point, st: &[f64]) -> f64 {
-    let lin: f64 = (0..st.len()).map(|i| pt.g[i] * st[i]).sum();
-    -(lin + 0.5 * curvature(pt, st))
 }
 
 /// The cost of a trial point (no Jacobian), counted as an evaluation.

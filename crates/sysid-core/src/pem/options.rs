@@ -183,9 +183,26 @@ pub(crate) fn stable_within(
     enforce_stability: bool,
     limit: f64,
 ) -> bool {
-    let inside = |m: MatRef<'_, f64>| matches!(spectral_radius(m), Ok(r) if r < limit);
+    matches!(bounded_radius(a, k, c, enforce_stability), Some(r) if r < limit)
+}
+
+/// The largest spectral radius a search's admissible set bounds: the predictor's `A - K C`,
+/// and with `enforce_stability` also `A`'s (a continuous function of the model: the margin
+/// a step turned along the boundary follows); `None` when an eigenvalue solve fails or
+/// gives NaN.
+pub(crate) fn bounded_radius(
+    a: MatRef<'_, f64>,
+    k: MatRef<'_, f64>,
+    c: MatRef<'_, f64>,
+    enforce_stability: bool,
+) -> Option<f64> {
+    let radius = |m: MatRef<'_, f64>| spectral_radius(m).ok().filter(|r| !r.is_nan());
     let abar = a - crate::linalg::mul(k, c);
-    inside(abar.as_ref()) && (!enforce_stability || inside(a))
+    let r = radius(abar.as_ref())?;
+    if enforce_stability {
+        return radius(a).map(|ra| ra.max(r));
+    }
+    Some(r)
 }
 
 /// The refined model and what the search did.

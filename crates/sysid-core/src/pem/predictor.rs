@@ -7,7 +7,9 @@
 //!
 //! with the weighted errors `R^-1 e` (`R R^T = Lambda`) whose half squared norm is the cost.
 
-use super::options::{stable_within, Focus, InitialState, PemOptions, MARGINAL_RADIUS};
+use super::options::{
+    bounded_radius, stable_within, Focus, InitialState, PemOptions, MARGINAL_RADIUS,
+};
 use crate::error::{check_finite, check_io, Result, SysidError};
 use crate::linalg::determinant;
 use crate::model::StateSpace;
@@ -683,11 +685,9 @@ impl<'a> Predictor<'a> {
             return None;
         }
         let pm = self.unpack(th);
-        let abar = &pm.a - crate::linalg::mul(pm.k.as_ref(), pm.c.as_ref());
-        let mut m = crate::linalg::spectral_radius(abar.as_ref()).ok()? - self.radius_limit;
-        if self.enforce_stability {
-            m = m.max(crate::linalg::spectral_radius(pm.a.as_ref()).ok()? - self.radius_limit);
-        }
+        let (a, k, c) = (pm.a.as_ref(), pm.k.as_ref(), pm.c.as_ref());
+        let limit = self.radius_limit;
+        let m = bounded_radius(a, k, c, self.enforce_stability)? - limit;
         m.is_finite().then_some(m)
     }
 
