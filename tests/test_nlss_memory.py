@@ -175,7 +175,7 @@ def test_the_fits_iterates_follow_their_cost_history(branches: int | None,
     data = sysid.IOData(u, y + 0.02 * rng.standard_normal((800, 1)), 1.0)
     seen = {}
 
-    def spy(build, res, d):  # the glue's inputs, kept
+    def spy(build, res, d, startup=None):  # the glue's inputs, kept
         seen.update(build=build, res=res)
         return build(np.asarray(res["theta"]))
 

@@ -186,9 +186,11 @@ def forgets(diffs: list[float | None]) -> bool:
 
 
 def latest_forgetting(build: Callable[[np.ndarray], Any], iterates: np.ndarray,
-                      data: IOData, first: list[int] | None = None
+                      data: IOData, first: list[int] | None = None,
+                      also: Callable[[Any], bool] | None = None
                       ) -> tuple[int, Any, tuple[list[float | None], list[int]]] | None:
-    """The latest of a search's iterates whose model forgets its initial state.
+    """The latest of a search's iterates whose model forgets its initial state (and passes
+    ``also``, when given).
 
     Used when the search's last iterate does not: the iterates (rows of ``iterates``, in
     search order, the last one excluded by the caller) are checked from the end on a grid of
@@ -208,6 +210,9 @@ def latest_forgetting(build: Callable[[np.ndarray], Any], iterates: np.ndarray,
     first : list of int, optional
         Experiments to check first (those the last iterate failed on): an iterate that fails
         there is judged without simulating the others.
+    also : callable, optional
+        A second test a model must pass (``also(model)`` true), judged after the memory
+        check: ``pnlss``'s start-up check (:mod:`sysid.nlss.startup`).
 
     Returns
     -------
@@ -245,21 +250,24 @@ def latest_forgetting(build: Callable[[np.ndarray], Any], iterates: np.ndarray,
     order = first + [e for e in range(len(data.experiments)) if e not in first]
     found = None
     failed = None
-    for i in grid:
+    def passes(i: int) -> tuple[bool, Any, Any]:
         m = build(iterates[i])
         d = differences(m, data, order, quick=True)
-        if forgets(d[0]):
+        return forgets(d[0]) and (also is None or also(m)), m, d
+
+    for i in grid:
+        ok, m, d = passes(i)
+        if ok:
             found = (i, m, d)
             break
         failed = i
     if found is None:
         return None
-    lo, hi = found[0], failed  # lo forgets, hi does not (None: lo is the last row)
+    lo, hi = found[0], failed  # lo passes, hi does not (None: lo is the last row)
     while hi is not None and hi - lo > 1:
         mid = (lo + hi) // 2
-        m = build(iterates[mid])
-        d = differences(m, data, order, quick=True)
-        if forgets(d[0]):
+        ok, m, d = passes(mid)
+        if ok:
             lo, found = mid, (mid, m, d)
         else:
             hi = mid

@@ -47,6 +47,8 @@ from .common import (
 )
 from .memory import check_memory
 from .selection import ValidationRecords, select_iterate, validation_records
+from .startup import StartUp
+from .startup import failing as startup_failing
 
 __all__ = ["PNLSSModel", "pnlss"]
 
@@ -318,7 +320,9 @@ def pnlss(
         ``"returned"`` when the model is an earlier iterate than the search's last (below,
         and ``validation``);
         ``info["memory"]``: the check that the model forgets its initial state
-        (:mod:`sysid.nlss.memory`).
+        (:mod:`sysid.nlss.memory`); ``info["startup"]``: the check that its start from
+        rest over each transient stays within what the record explains
+        (:mod:`sysid.nlss.startup`; not with ``average=True``).
 
     Warns
     -----
@@ -326,9 +330,11 @@ def pnlss(
         When the linear part is unstable, or when the model, simulated from rest at the
         middle of a training experiment, does not return to its simulation of the whole
         experiment (a second stable equilibrium or orbit: its simulation of other data
-        depends on where it starts). When the search's last model fails that check but an
-        earlier iterate passes it, the latest such iterate is returned instead, with this
-        warning (its iteration and cost in ``info["fit"]["returned"]``).
+        depends on where it starts), or when, simulated from rest, it misses a training
+        experiment's transient by far more than a start from rest explains. When the
+        search's last model fails either check but an earlier iterate passes both, the
+        latest such iterate is returned instead, with this warning (its iteration and cost
+        in ``info["fit"]["returned"]``).
     IterationLimitWarning
         When the search stopped at ``max_iter``.
 
@@ -412,6 +418,8 @@ def pnlss(
             N // pers[k] if pers and pers[k] > 1 else settle_samples(lin, N))
         recs.append((u, y, int(skip)))
     weights = _weights(weighting, sd, pers, recs, average)
+    # the start from rest over each transient, judged on the records as measured
+    startup = None if average else StartUp.of(lin, recs, data)
     if average:
         recs = _averaged(sd, pers)
         us = [r[0] for r in recs]
@@ -449,15 +457,16 @@ def pnlss(
     if val_recs is not None:
         val = ValidationRecords(val_recs, sc.y_scale, lambda N: (
             transient if transient is not None else settle_samples(lin, N)))
-        return _validated(build, res, data, val, max_iter)
+        return _validated(build, res, data, val, max_iter, startup)
     _warn_short(res, max_iter)
-    return _forgetting(build, res, data)
+    return _forgetting(build, res, data, startup)
 
 
 def _validated(build: Callable[[np.ndarray], Any], res: dict[str, Any], data: IOData,
-               val: ValidationRecords, max_iter: int) -> Any:
+               val: ValidationRecords, max_iter: int, startup: StartUp | None) -> Any:
     """The iterate that simulates the validation records best
-    (:func:`~sysid.nlss.selection.select_iterate`), checked for fading memory; the cap
+    (:func:`~sysid.nlss.selection.select_iterate`), checked for fading memory and its start
+    from rest (said, not replaced: the choice is the validation data's); the cap
     warning only when that is the search's last iterate (an earlier one was chosen on
     data the later ones simulate worse)."""
     k, model, errors = select_iterate(build, res["iterates"], val)
@@ -472,18 +481,20 @@ def _validated(build: Callable[[np.ndarray], Any], res: dict[str, Any], data: IO
             "last_cost": float(hist[-1]), "reason": "lowest validation error"}
     else:
         _warn_short(res, max_iter)
-    return check_memory(_warn_unstable(model), data, "pnlss")
+    return check_memory(_warn_unstable(_startup_said(startup, model)), data, "pnlss")
 
 
-def _forgetting(build: Callable[[np.ndarray], Any], res: dict[str, Any], data: IOData) -> Any:
+def _forgetting(build: Callable[[np.ndarray], Any], res: dict[str, Any], data: IOData,
+                startup: StartUp | None = None) -> Any:
     """The model of the search's result, checked for fading memory
-    (:func:`~sysid.nlss.memory.check_memory`); when it does not forget its initial state, the
-    model of the latest iterate that does (:func:`~sysid.nlss.memory.latest_forgetting`),
-    with a :class:`~sysid.StabilityWarning` that says which and at what cost. A search can
-    walk into a model with a second stable equilibrium or orbit late, after iterates that
-    forgot; an earlier iterate is a better model to return than the last one with a warning
-    (pH, the bench's split: the decoupled fit tested at 8.34 from its last iterate, at 1.02
-    from its iteration 3; ``benches/results/nonlinear.md``)."""
+    (:func:`~sysid.nlss.memory.check_memory`) and for its start from rest over the transients
+    (:mod:`sysid.nlss.startup`); when it fails either, the model of the latest iterate that
+    passes both (:func:`~sysid.nlss.memory.latest_forgetting`), with a
+    :class:`~sysid.StabilityWarning` that says which and at what cost. A search can walk into
+    such a model late, after iterates that passed; an earlier iterate is a better model to
+    return than the last one with a warning (pH, the bench's split: the decoupled fit tested
+    at 8.34 from its last iterate, at 1.02 from its iteration 3;
+    ``benches/results/nonlinear.md``)."""
     import warnings
 
     from .._checks import user_stacklevel
@@ -494,27 +505,61 @@ def _forgetting(build: Callable[[np.ndarray], Any], res: dict[str, Any], data: I
     measured = differences(model, data)
     its = res["iterates"]
     failed = failing(measured[0])
-    found = None if not failed or len(its) < 2 else \
-        latest_forgetting(build, its[:-1], data, failed)
+    ratios = [] if startup is None else startup.excess(model)
+    wild = startup_failing(ratios)
+    found = None if not (failed or wild) or len(its) < 2 else \
+        latest_forgetting(build, its[:-1], data, failed,
+                          None if startup is None else startup.passes)
     if found is None:
-        return check_memory(_warn_unstable(model), data, "pnlss", measured)
+        return check_memory(_warn_unstable(_startup_said(startup, model, ratios)), data,
+                            "pnlss", measured)
     k, earlier, kept = found
     hist = res["history"]
-    worst = max(d for d in measured[0] if d is not None)
-    earlier.info["fit"]["returned"] = {
-        "iteration": int(k), "cost": float(hist[k]), "last_cost": float(hist[-1]),
-        "last_difference": float(worst)}
-    what = ("diverges" if not np.isfinite(worst) else
-            f"stays {worst:.3g} output standard deviations away from its simulation of the "
-            "whole experiment")
+    returned: dict[str, Any] = {"iteration": int(k), "cost": float(hist[k]),
+                                "last_cost": float(hist[-1])}
+    if startup is not None:
+        returned["last_startup_excess"] = ratios
+    if failed:
+        worst = max(d for d in measured[0] if d is not None)
+        returned["last_difference"] = float(worst)
+        what = ("diverges" if not np.isfinite(worst) else
+                f"stays {worst:.3g} output standard deviations away from its simulation of "
+                "the whole experiment")
+        why = (f"does not forget its initial state (simulated from rest at the middle of a "
+               f"training experiment it {what})")
+        passing, avoid = "does", "the second behaviour"
+    else:
+        why = f"does not start from rest as its data do ({startup.describe(model, ratios)})"
+        passing, avoid = "starts within what the start from rest explains", "the swing"
+    earlier.info["fit"]["returned"] = returned
     warnings.warn(
-        f"pnlss: the search's last model (iteration {len(its) - 1}, cost {hist[-1]:.6g}) does "
-        f"not forget its initial state (simulated from rest at the middle of a training "
-        f"experiment it {what}): returned the model of iteration {k} (cost "
-        f"{hist[k]:.6g}), the latest found that does; info['fit']['returned']. Check it on "
-        f"validation data (sysid.compare); fewer iterations, a lower degree or fewer terms "
-        f"avoid the second behaviour", StabilityWarning, stacklevel=user_stacklevel())
-    return check_memory(_warn_unstable(earlier), data, "pnlss", kept)
+        f"pnlss: the search's last model (iteration {len(its) - 1}, cost {hist[-1]:.6g}) "
+        f"{why}: returned the model of iteration {k} (cost {hist[k]:.6g}), the latest found "
+        f"that {passing}; info['fit']['returned']. Check it on validation data "
+        f"(sysid.compare); fewer iterations, a lower degree or fewer terms avoid {avoid}",
+        StabilityWarning, stacklevel=user_stacklevel())
+    return check_memory(_warn_unstable(_startup_said(startup, earlier)), data, "pnlss", kept)
+
+
+def _startup_said(startup: StartUp | None, model: Any,
+                  ratios: list[float | None] | None = None) -> Any:
+    """``model`` with its start-up check recorded (``info["startup"]``) and, when it swings
+    away from its data over a transient, a :class:`~sysid.StabilityWarning` saying so."""
+    import warnings
+
+    from .._checks import user_stacklevel
+    from ..errors import StabilityWarning
+
+    if startup is None:
+        return model
+    ratios = startup.excess(model) if ratios is None else ratios
+    if startup_failing(ratios):
+        warnings.warn(f"pnlss returned a model that does not start from rest as its data do: "
+                      f"{startup.describe(model, ratios)}. Its simulations from rest "
+                      f"(validation data, sysid.compare) start with that error; give them a "
+                      f"warm-up or an initial state, or try fewer iterations, a lower degree "
+                      f"or fewer terms", StabilityWarning, stacklevel=user_stacklevel())
+    return startup.note(model, ratios)
 
 
 def _auto_degree(data: IOData, n: int, kw: dict[str, Any], progress: Any) -> Any:
