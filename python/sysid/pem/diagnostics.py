@@ -20,14 +20,15 @@ __all__ = ["lines_record_length", "warn_refinement", "warn_undetermined"]
 
 
 def warn_refinement(res: dict[str, Any], focus: str, max_iter: int, enforce: bool | None,
-                    n: int = 0, held: bool = True) -> None:
+                    n: int = 0, held: bool = True, boundary: bool = True) -> None:
     """The warnings of a refinement: an unstable model, a pole at the unit circle
     (:func:`.boundary.warn_boundary`; ``held``: a bound kept ``A`` stable, else the search
-    ended there freely; ``n``: samples of the longest experiment), a capped search; each
-    at the user's line."""
+    ended there freely; ``n``: samples of the longest experiment; not with ``boundary``
+    false: a warning that the data insist on an unstable model said more), a capped search;
+    each at the user's line."""
     rho = float(res["spectral_radius"])
     level = user_stacklevel()
-    if focus == "simulation" or enforce is not False:
+    if boundary and (focus == "simulation" or enforce is not False):
         warn_boundary(res["a"], n, stacklevel=level, held=held)
     if rho >= 1.0 and enforce is None and n and not grows([rho], n):
         # a pole the record cannot tell from 1 (an offset left in the data puts one there):

@@ -420,8 +420,10 @@ def pem(
         times smaller was ignored: validation fit -1411 % instead of 77 %).
     enforce_stability : bool, optional
         Keep ``A`` stable (MATLAB's ``EnforceStability``). ``focus="simulation"`` always
-        does. ``None`` (default): with ``focus="prediction"`` the predictor ``A - K C`` is
-        always stable and ``A`` is kept stable unless an unstable model fits significantly
+        does (from an unstable start, a :class:`sysid.StabilityWarning` says when the record
+        insists on an unstable model: ``info["pem"]["held_stable"]``). ``None`` (default):
+        with ``focus="prediction"`` the predictor ``A - K C`` is always stable and ``A`` is
+        kept stable unless an unstable model fits significantly
         better (likelihood-ratio test at the 1 % level, made only once the stable search has
         converged: one stopped at ``max_iter`` keeps ``A`` stable); then a
         :class:`sysid.StabilityWarning` names the largest pole modulus. ``False``: only the
@@ -601,7 +603,12 @@ def pem(
     # stable start (the core's rule)
     held = (focus == "simulation" or bool(enforce_stability)
             or (enforce_stability is None and _radius(A) < 1.0))
-    warn_refinement(res, focus, max_iter, enforce_stability, max(data.lengths), held)
+    insist = None  # the simulation focus held an unstable start stable: does the record insist?
+    if focus == "simulation" and st.stabilized:
+        from .held_stable import check_held_stable
+        insist = check_held_stable(res, StateSpaceModel(model.A, B, C, D, dt=data.dt), data)
+    warn_refinement(res, focus, max_iter, enforce_stability, max(data.lengths), held,
+                    boundary=not (insist or {}).get("insists", False))
     stabilized = st.stabilized
     Kres = res["k"] if K is not None else None
     x0s = [x / st.xscale for x in res["x0"]]
@@ -652,7 +659,7 @@ def pem(
         "noise": noise if focus == "prediction" else "none",
         "x0": ["estimate" if isinstance(m, str) and m == "estimate" else
                ("zero" if isinstance(m, str) else "given") for m in modes],
-        "stabilized": stabilized,
+        "stabilized": stabilized, "held_stable": insist,
         "spectral_radius": float(res["spectral_radius"]),
         "enforce_stability": enforce_stability,
         "n_parameters": int(res["theta"].size),
