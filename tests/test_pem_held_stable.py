@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 import sysid
-from sysid.pem.held_stable import check_held_stable, simulation_errors_ls
+from sysid.pem.held_stable import check_held_stable
+from sysid.validation.runner import fitted_simulation_errors
 
 
 def _unstable_record(seed: int, pole: float, N: int = 600) -> sysid.IOData:
@@ -69,5 +70,5 @@ def test_the_initial_state_is_fitted_for_an_unstable_model_too() -> None:
                               [[0.1]], dt=1.0)
     u = np.random.default_rng(2).standard_normal((400, 1))
     y = m.simulate(u, x0=[-2.0, 4.0])  # grows 1.3e5-fold
-    e = simulation_errors_ls(m, u, y)
+    e = fitted_simulation_errors(m, u, y)
     assert np.max(np.abs(e)) < 1e-6 * np.max(np.abs(y))

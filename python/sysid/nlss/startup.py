@@ -15,27 +15,33 @@ input the model missed it by 3.1 standard deviations (root mean square), 0.13 af
 :func:`excess` judges this on the training data. Each experiment is simulated from rest; its
 error over the transient is set against what a start from rest explains there: the model's own
 error after the transient, and the part of the linear start's error over the transient that
-the linear start's error after it does not explain (the record's unknown initial state: the
+an initial state fitted to the record removes (the record's unknown initial state: the
 linear start, too, starts from rest). An experiment whose root-mean-square error over the
 transient (per output, in the output's standard deviations) exceeds :data:`STARTUP_FACTOR`
-times that allowance, and one output standard deviation (:data:`FLOOR`), fails.
+(10) times that allowance, and one output standard deviation (:data:`FLOOR`), fails.
 """
 
 from __future__ import annotations
 
+import warnings
 from typing import Any
 
 import numpy as np
 
 from ..errors import NumericalError
+from ..validation.runner import fitted_simulation_errors
 
 __all__ = ["FLOOR", "MIN_WINDOW", "STARTUP_FACTOR", "StartUp", "excess", "failing", "initial_part"]
 
 #: How many times the allowance (see the module documentation) an experiment's error over
-#: the transient may reach. On simulated Duffing and Wiener-Hammerstein records (32 PNLSS fits
-#: of 50 iterations, coupled and decoupled, two training amplitudes) the last iterates missed
-#: their transients by 0.06-0.6 output standard deviations, except one that swings away: 8.8
-#: and 5.5, 12 and 14 times its allowance (its errors after the transient, 0.25 and 0.13).
+#: the transient may reach: a gross swing, not a start-up a little off. On simulated Duffing
+#: and Wiener-Hammerstein records (32 PNLSS fits of 50 iterations, coupled and decoupled, two
+#: training amplitudes) the last iterates missed their transients by 0.06-0.6 output standard
+#: deviations, except one that swings away: 8.8 and 5.5, 3.2 and 5.4 times what it allows. The
+#: fold fits of EMPS's automatic degree (a position record, not shipped: an integrator whose
+#: initial offset stays in the whole record) pass only because the linear start's part is
+#: the one a fitted initial state removes; measured against its error after the transient
+#: instead, they failed and the degree choice moved (``benches/results/nonlinear.md``).
 STARTUP_FACTOR = 3.0
 #: Transients shorter than this (samples) are not judged: too few errors to compare.
 MIN_WINDOW = 10
@@ -65,12 +71,14 @@ def _scale(y: np.ndarray) -> np.ndarray:
 def initial_part(linear: Any, experiments: list[tuple[np.ndarray, np.ndarray]],
                  skips: list[int]) -> list[np.ndarray | None]:
     """Per experiment and output, the squared part of the linear start's error over the
-    transient that its error after the transient does not explain (in squared output
-    standard deviations): what the record's unknown initial state adds there.
+    transient (simulated from rest) that a fitted initial state removes (in squared output
+    standard deviations): what the record's unknown initial state adds there. A fitted state
+    rather than the error after the transient: an integrating plant's initial offset stays
+    in the whole record.
 
     Parameters
     ----------
-    linear : model with ``simulate(u)`` (from rest)
+    linear : StateSpaceModel
         The fit's linear start, in the units of ``experiments``.
     experiments : list of (u, y)
         The training experiments.
@@ -97,9 +105,17 @@ def initial_part(linear: Any, experiments: list[tuple[np.ndarray, np.ndarray]],
         if not _judged(u, skip):
             out.append(None)
             continue
-        e = y - np.asarray(linear.simulate(u)).reshape(y.shape)
-        w, a = _split_rms(e, skip, _scale(y))
-        out.append(np.maximum(w ** 2 - a ** 2, 0.0))
+        with warnings.catch_warnings(), np.errstate(all="ignore"):
+            warnings.simplefilter("ignore")
+            rest = y - np.asarray(linear.simulate(u), float).reshape(y.shape)
+        fitted = fitted_simulation_errors(linear, u, y)  # the state fitted over the record
+        if not np.all(np.isfinite(fitted)):  # the linear start diverges: nothing explained
+            out.append(np.zeros(y.shape[1]))
+            continue
+        scale = _scale(y)
+        w_rest = _split_rms(rest, skip, scale)[0]
+        w_fit = _split_rms(fitted, skip, scale)[0]
+        out.append(np.maximum(w_rest ** 2 - w_fit ** 2, 0.0))
     return out
 
 

@@ -26,14 +26,14 @@ from typing import Any
 
 import numpy as np
 
-from .. import _sysid
 from .._checks import user_stacklevel
 from .._display import modulus
 from ..errors import StabilityWarning
 from ..models.statespace import StateSpaceModel
+from ..validation.runner import fitted_simulation_errors
 from .boundary import insists
 
-__all__ = ["GROWTH", "check_held_stable", "simulation_errors_ls"]
+__all__ = ["GROWTH", "check_held_stable"]
 
 #: The largest growth of the start's fastest mode over the samples compared: beyond it the
 #: free responses' columns span more than the double precision of a least-squares fit keeps.
@@ -44,32 +44,6 @@ MIN_PER_STATE = 10
 
 def _radius(A: np.ndarray) -> float:
     return float(np.max(np.abs(np.linalg.eigvals(A)))) if A.size else 0.0
-
-
-def simulation_errors_ls(model: StateSpaceModel, u: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """``y`` minus ``model``'s simulation of ``u`` from the initial state that fits ``y``
-    best (least squares, each output relative to its spread; in the core, blockwise, by QR
-    where a growing mode needs it), ``(N, l)``; the model may be unstable (then keep ``N``
-    short enough for its growth).
-
-    Examples
-    --------
-    >>> import numpy as np, sysid
-    >>> from sysid.pem.held_stable import simulation_errors_ls
-    >>> m = sysid.StateSpaceModel([[1.02]], [[1.0]], [[1.0]], [[0.0]], dt=1.0)
-    >>> u = np.random.default_rng(0).standard_normal((300, 1))
-    >>> bool(np.abs(simulation_errors_ls(m, u, m.simulate(u, x0=[3.0]))).max() < 1e-6)
-    True
-    """
-    y = np.asarray(y, float)
-    with warnings.catch_warnings(), np.errstate(all="ignore"):
-        warnings.simplefilter("ignore")  # an unstable model's own warnings
-        ys = np.asarray(model.simulate(u), float).reshape(y.shape)
-        if model.nstates == 0:
-            return y - ys
-        e = _sysid.fitted_errors(np.asarray(model.A, float), np.asarray(model.C, float), y, ys,
-                                 False, None)
-    return np.full(y.shape, np.inf) if e is None else np.asarray(e).reshape(y.shape)
 
 
 def check_held_stable(res: Any, start: StateSpaceModel, data: Any) -> dict[str, Any] | None:
@@ -112,8 +86,8 @@ def check_held_stable(res: Any, start: StateSpaceModel, data: Any) -> dict[str, 
         return None
     scale = np.std(np.vstack([y for _, y in exps]), axis=0)
     scale = np.where(scale > 0, scale, 1.0)
-    kept = sum(float(np.sum((simulation_errors_ls(out, u, y) / scale) ** 2)) for u, y in exps)
-    lost = sum(float(np.sum((simulation_errors_ls(free, u, y) / scale) ** 2))
+    kept = sum(float(np.sum((fitted_simulation_errors(out, u, y) / scale) ** 2)) for u, y in exps)
+    lost = sum(float(np.sum((fitted_simulation_errors(free, u, y) / scale) ** 2))
                for u, y in exps)
     n = sum(u.shape[0] for u, _ in exps)
     # an exact start (noise-free data): infinitely more likely

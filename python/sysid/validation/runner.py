@@ -7,10 +7,12 @@ prediction.
 
 from __future__ import annotations
 
+import warnings
 from typing import Any, Union
 
 import numpy as np
 
+from .. import _sysid
 from .._checks import as_2d, as_int
 from ..data.iodata import IOData
 from ..errors import DataError, NumericalError, ShapeError, several_records_hint
@@ -18,7 +20,7 @@ from ..models.checks import check_model, inner_model
 from ..models.trended import TrendedModel
 from .fit import output_weights
 
-__all__ = ["estimate_x0", "given_start", "X0"]
+__all__ = ["X0", "estimate_x0", "fitted_simulation_errors", "given_start"]
 
 X0 = Union[str, np.ndarray, None]
 
@@ -236,6 +238,44 @@ def estimate_x0(model: Any, u: Any, y: Any = None, horizon: int | None = None) -
     with np.errstate(over="ignore", invalid="ignore"):
         x0, *_ = np.linalg.lstsq(phi * w[:, None], target * w, rcond=None)
     return x0 if np.all(np.isfinite(x0)) else np.zeros(n)
+
+
+def fitted_simulation_errors(model: Any, u: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """``y`` minus the linear state-space ``model``'s simulation of ``u`` from the initial
+    state that fits ``y`` best (least squares, each output relative to its spread, as
+    :func:`estimate_x0`; in the core, blockwise, no ``(N l, n)`` array, by QR where a growing
+    mode needs it); the model may be unstable (then keep ``N`` short enough for its growth).
+
+    Parameters
+    ----------
+    model : StateSpaceModel
+        A linear model (``A``, ``C`` and ``simulate``).
+    u, y : ndarray, shape (N, m) and (N, l)
+        One record.
+
+    Returns
+    -------
+    ndarray, shape (N, l)
+        The errors (``inf`` everywhere when the model's run diverges).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.validation.runner import fitted_simulation_errors
+    >>> m = sysid.StateSpaceModel([[1.02]], [[1.0]], [[1.0]], [[0.0]], dt=1.0)
+    >>> u = np.random.default_rng(0).standard_normal((300, 1))
+    >>> bool(np.abs(fitted_simulation_errors(m, u, m.simulate(u, x0=[3.0]))).max() < 1e-6)
+    True
+    """
+    y = np.asarray(y, float)
+    with warnings.catch_warnings(), np.errstate(all="ignore"):
+        warnings.simplefilter("ignore")  # an unstable model's own warnings
+        ys = np.asarray(model.simulate(u), float).reshape(y.shape)
+        if model.nstates == 0:
+            return y - ys
+        e = _sysid.fitted_errors(np.asarray(model.A, float), np.asarray(model.C, float), y, ys,
+                                 False, None)
+    return np.full(y.shape, np.inf) if e is None else np.asarray(e).reshape(y.shape)
 
 
 def _estimate_x0_nonlinear(model: Any, u: np.ndarray, y: np.ndarray,
