@@ -77,7 +77,6 @@ def check_held_stable(res: Any, start: StateSpaceModel, data: Any) -> dict[str, 
     rho = _radius(np.asarray(start.A, float))
     if rho < 1.0 or _radius(np.asarray(out.A, float)) >= 1.0:
         return None
-    free = start
     grow = np.inf if rho == 1.0 else np.log(GROWTH) / np.log(rho)
     exps = [(np.asarray(u, float), np.asarray(y, float)) for u, y in data.experiments]
     exps = [(u[:int(min(u.shape[0], grow))], y[:int(min(u.shape[0], grow))]) for u, y in exps]
@@ -86,14 +85,17 @@ def check_held_stable(res: Any, start: StateSpaceModel, data: Any) -> dict[str, 
         return None
     scale = np.std(np.vstack([y for _, y in exps]), axis=0)
     scale = np.where(scale > 0, scale, 1.0)
-    kept = sum(float(np.sum((fitted_simulation_errors(out, u, y) / scale) ** 2)) for u, y in exps)
-    lost = sum(float(np.sum((fitted_simulation_errors(free, u, y) / scale) ** 2))
-               for u, y in exps)
+
+    def cost(m: StateSpaceModel) -> float:
+        return sum(float(np.sum((fitted_simulation_errors(m, u, y) / scale) ** 2))
+                   for u, y in exps)
+
+    kept, free = cost(out), cost(start)
     n = sum(u.shape[0] for u, _ in exps)
     # an exact start (noise-free data): infinitely more likely
-    lr, yes = insists(kept, lost, n, out.noutputs) if lost > 0 else (float("inf"), kept > 0)
+    lr, yes = insists(kept, free, n, out.noutputs) if free > 0 else (float("inf"), kept > 0)
     test = {"likelihood_ratio": lr, "insists": yes, "start_radius": rho, "samples": n,
-            "error_ratio": float(np.sqrt(kept / lost)) if lost > 0 else float("inf")}
+            "error_ratio": float(np.sqrt(kept / free)) if free > 0 else float("inf")}
     if yes:
         warnings.warn(
             f"the simulation focus held the model stable (largest pole modulus "
