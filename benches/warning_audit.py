@@ -263,6 +263,8 @@ def run_calls(scenario: str, est, val, facts: dict, with_identify: bool) -> dict
         m_oe = rec("oe", lambda: sysid.oe(est, n, n, 1, **it))
         m_am = rec("armax", lambda: sysid.armax(est, n, n, n, 1, **it))
         m_tf = rec("tfest", lambda: sysid.tfest(est, n, **it))
+        if nu == 1:  # F held stable too, beside a noise model (session 61)
+            rec("bj", lambda: sysid.bj(est, n, 1, 1, n, 1, **it))
     if capped:  # the same searches uncapped: was a warning due?
         full = {"ssest(n)": lambda: sysid.ssest(est, n), "oe": lambda: sysid.oe(est, n, n, 1),
                 "armax": lambda: sysid.armax(est, n, n, n, 1), "tfest": lambda: sysid.tfest(est, n)}
@@ -451,6 +453,7 @@ def real_record(name: str, est, val) -> dict:
         rec("oe(3,3,1)", lambda: sysid.oe(est, 3, 3, 1))
         rec("armax(3,3,3,1)", lambda: sysid.armax(est, 3, 3, 3, 1))
         rec("tfest(3)", lambda: sysid.tfest(est, 3))
+        rec("bj(3,1,1,3,1)", lambda: sysid.bj(est, 3, 1, 1, 3, 1))
     if m is not None:
         rec("poles(std)", lambda: m.poles(std=True))
         rec("compare", lambda: sysid.compare(val, m))

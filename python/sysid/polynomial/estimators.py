@@ -407,8 +407,8 @@ def _pem(
             if said:
                 found.append((f"{m.output_names[i]} <- {m.input_names[j]}", said))
             at += nf
-    insisting = method == "oe" and m.is_stable() and warn_insisting_f(
-        m, exps, rs, na_v, nb_g, nc_v, nd_v, nf_g, nk_g, iters)
+    insisting = method in ("oe", "bj", "polyest") and m.is_stable() and warn_insisting_f(
+        m, exps, rs, na_v, nb_g, nc_v, nd_v, nf_g, nk_g, iters, method)
     if insisting:  # a stable fit of a plant the data say is unstable: its pole-zero pairs
         m.info["cancellations"] = found  # are the bound's doing; "lower nb, nf" misleads
     else:

@@ -1,4 +1,5 @@
-"""Whether the data insist on an unstable ``F`` where ``oe``'s search keeps every ``F``
+"""Whether the data insist on an unstable ``F`` where the search of ``oe``, ``bj`` or ``polyest``
+keeps every ``F``
 stable (issue 26: a stable model unless the data insist, and then a StabilityWarning that
 names the pole and the option)."""
 
@@ -17,13 +18,15 @@ __all__ = ["warn_insisting_f"]
 
 def warn_insisting_f(m: PolynomialModel, exps: list[Any], rs: list[dict[str, Any]],
                       na: list[int], nb: list[list[int]], nc: list[int], nd: list[int],
-                      nf: list[list[int]], nk: list[list[int]], iters: int) -> bool:
+                      nf: list[list[int]], nk: list[list[int]], iters: int,
+                      method: str = "oe") -> bool:
     """The search keeps every ``F`` stable: from each output's fit, the search again with
     ``F`` free to leave the unit circle, and a :class:`~sysid.StabilityWarning` when the data
     insist on an unstable ``F`` (:func:`sysid.pem.boundary.insists`, 1 %), naming the pole
-    and what fits it (``oe`` itself keeps ``F`` stable); True if it warned. From a minimum
-    inside the stability region the free search stops at once; an unstable plant's record
-    (a real pole at 1.01-1.03) left ``oe``'s stable fit silent in 48 of 100 runs."""
+    and what fits it (``method``, ``oe``, ``bj`` or ``polyest``, itself keeps ``F`` stable);
+    True if it warned. From a minimum inside the stability region the free search stops at
+    once; an unstable plant's record (a real pole at 1.01-1.03) left ``oe``'s stable fit
+    silent in 48 of 100 runs, and ``bj``'s and ``polyest``'s in 6 of the first 10."""
     from ..pem.boundary import grows, insists, warn_insisted
 
     found = []
@@ -64,10 +67,10 @@ def warn_insisting_f(m: PolynomialModel, exps: list[Any], rs: list[dict[str, Any
     if not found:
         return False
     lr, pair, pole = max(found, key=lambda x: x[0])
-    warn_insisted("the oe model's F", pair, pole, float(m.dt), lr,
-                  "oe keeps F stable: sysid.ssest(data, order) (prediction focus, whose "
-                  "default returns the unstable model when the data insist) or arx/armax "
-                  "(whose A is not held stable) fit it")
+    warn_insisted(f"the {method} model's F", pair, pole, float(m.dt), lr,
+                  f"{method} keeps F stable: sysid.ssest(data, order) (prediction focus, "
+                  f"whose default returns the unstable model when the data insist) or "
+                  f"arx/armax (whose A is not held stable) fit it")
     m.info["insisting"] = [{"pair": p, "pole": z, "statistic": v} for v, p, z in found]
     return True
 
