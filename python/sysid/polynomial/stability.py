@@ -1,7 +1,6 @@
-"""Whether the data insist on an unstable ``F`` where the search of ``oe``, ``bj`` or ``polyest``
-keeps every ``F``
-stable (issue 26: a stable model unless the data insist, and then a StabilityWarning that
-names the pole and the option)."""
+"""Whether the data insist on an unstable ``F`` where the search of ``oe``, ``bj`` or
+``polyest`` keeps every ``F`` stable (issue 26: a stable model unless the data insist, and
+then a StabilityWarning that names the pole and the option)."""
 
 from __future__ import annotations
 
