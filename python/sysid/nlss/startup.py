@@ -18,7 +18,7 @@ error after the transient, and the part of the linear start's error over the tra
 an initial state fitted to the record removes (the record's unknown initial state: the
 linear start, too, starts from rest). An experiment whose root-mean-square error over the
 transient (per output, in the output's standard deviations) exceeds :data:`STARTUP_FACTOR`
-(10) times that allowance, and one output standard deviation (:data:`FLOOR`), fails.
+(3) times that allowance, and one output standard deviation (:data:`FLOOR`), fails.
 """
 
 from __future__ import annotations
@@ -107,8 +107,9 @@ def initial_part(linear: Any, experiments: list[tuple[np.ndarray, np.ndarray]],
             continue
         with warnings.catch_warnings(), np.errstate(all="ignore"):
             warnings.simplefilter("ignore")
-            rest = y - np.asarray(linear.simulate(u), float).reshape(y.shape)
-        fitted = fitted_simulation_errors(linear, u, y)  # the state fitted over the record
+            ys = np.asarray(linear.simulate(u), float).reshape(y.shape)
+        rest = y - ys
+        fitted = fitted_simulation_errors(linear, u, y, ys)  # the state fitted over the record
         if not np.all(np.isfinite(fitted)):  # the linear start diverges: nothing explained
             out.append(np.zeros(y.shape[1]))
             continue

@@ -18,8 +18,8 @@ import numpy as np
 from .._checks import PERSISTENT_DECAY, mode_kept, user_stacklevel
 from ..errors import StabilityWarning
 
-__all__ = ["cap_advice", "grows", "insists", "integrator_advice", "warn_boundary",
-           "warn_insisted", "warn_poles_at_bound"]
+__all__ = ["cap_advice", "grows", "insists", "integrator_advice", "spectral_radius",
+           "warn_boundary", "warn_insisted", "warn_poles_at_bound"]
 
 
 def grows(poles: Any, n: int, dt: float = 0.0) -> bool:
@@ -165,6 +165,19 @@ def cap_advice(res: dict[str, Any], focus: str = "prediction") -> str:
                 "(it may take hundreds)")
     again = "" if focus == "prediction" else f", focus={focus!r}"
     return f"raise max_iter, or refine again with sysid.pem(data, model{again})"
+
+
+def spectral_radius(A: Any) -> float:
+    """The largest eigenvalue modulus of the square matrix ``A`` (0 for an empty one).
+
+    Examples
+    --------
+    >>> from sysid.pem.boundary import spectral_radius
+    >>> spectral_radius([[0.5, 1.0], [0.0, -0.9]])
+    0.9
+    """
+    A = np.asarray(A, dtype=float)
+    return float(np.max(np.abs(np.linalg.eigvals(A)), initial=0.0)) if A.size else 0.0
 
 
 def insists(kept: float, free: float, n: int, l: int = 1) -> tuple[float, bool]:

@@ -31,7 +31,7 @@ from .._display import modulus
 from ..errors import StabilityWarning
 from ..models.statespace import StateSpaceModel
 from ..validation.runner import fitted_simulation_errors
-from .boundary import insists
+from .boundary import insists, spectral_radius
 
 __all__ = ["GROWTH", "check_held_stable"]
 
@@ -40,10 +40,6 @@ __all__ = ["GROWTH", "check_held_stable"]
 GROWTH = 1e8
 #: Fewer samples than this many per state are not compared.
 MIN_PER_STATE = 10
-
-
-def _radius(A: np.ndarray) -> float:
-    return float(np.max(np.abs(np.linalg.eigvals(A)))) if A.size else 0.0
 
 
 def check_held_stable(res: Any, start: StateSpaceModel, data: Any) -> dict[str, Any] | None:
@@ -74,8 +70,8 @@ def check_held_stable(res: Any, start: StateSpaceModel, data: Any) -> dict[str, 
     """
     out = res if isinstance(res, StateSpaceModel) else StateSpaceModel(
         res["a"], res["b"], res["c"], res["d"], dt=start.dt)
-    rho = _radius(np.asarray(start.A, float))
-    if rho < 1.0 or _radius(np.asarray(out.A, float)) >= 1.0:
+    rho = spectral_radius(start.A)
+    if rho < 1.0 or spectral_radius(out.A) >= 1.0:
         return None
     grow = np.inf if rho == 1.0 else np.log(GROWTH) / np.log(rho)
     exps = [(np.asarray(u, float), np.asarray(y, float)) for u, y in data.experiments]
@@ -99,7 +95,7 @@ def check_held_stable(res: Any, start: StateSpaceModel, data: Any) -> dict[str, 
     if yes:
         warnings.warn(
             f"the simulation focus held the model stable (largest pole modulus "
-            f"{modulus(_radius(np.asarray(out.A, float)))}), but the data insist on an unstable "
+            f"{modulus(spectral_radius(out.A))}), but the data insist on an unstable "
             f"one: the search's start as given (largest pole modulus {modulus(rho)}) "
             f"simulates the record's first {n} samples with errors {test['error_ratio']:.3g} "
             f"times smaller (initial states fitted; likelihood ratio {lr:.3g} > 6.63, the 1 % "

@@ -33,6 +33,7 @@ from ..models.uncertainty import ParameterUncertainty
 from ..polynomial.model import PolynomialModel
 from ..subspace.feedthrough import check_feedthrough, choose_feedthrough
 from ..validation.output_error import output_error
+from .boundary import spectral_radius
 from .diagnostics import lines_record_length, warn_refinement, warn_undetermined
 from .records import _experiments
 from .ssform import StateSpaceStructure
@@ -51,10 +52,6 @@ def _stabilize(A: np.ndarray) -> np.ndarray:
     """Reflect eigenvalues outside the unit circle to ``0.99 / conj(z)`` (a real matrix;
     the core's ``reflect_unstable_poles``)."""
     return _sysid.reflect_unstable_poles(np.ascontiguousarray(A, dtype=float), 0.99)
-
-
-def _radius(M: np.ndarray) -> float:
-    return float(np.max(np.abs(np.linalg.eigvals(M)))) if M.size else 0.0
 
 
 def _x0_modes(x0: Any, count: int, n: int) -> list[Any]:
@@ -179,14 +176,14 @@ def _setup(data: Any, model: StateSpaceModel, focus: str, feedthrough: Any, x0: 
     # an unstable start: stabilise first and record it
     stabilized = None
     if focus != "prediction" or K is None or enforce_stability:
-        if _radius(A) >= 1.0:
+        if spectral_radius(A) >= 1.0:
             A = _stabilize(A)
             stabilized = "unstable poles of A reflected into the unit circle"
-    if K is not None and _radius(A - K @ C) >= 1.0:
+    if K is not None and spectral_radius(A - K @ C) >= 1.0:
         if noise == "fixed":
             raise DataError("the start's predictor A - K C is unstable and noise='fixed' keeps "
                             "K: give a stabilising K or use noise='estimate'")
-        if _radius(A) >= 1.0:
+        if spectral_radius(A) >= 1.0:
             A = _stabilize(A)
             stabilized = "unstable poles of A reflected and K = 0"
         else:
@@ -602,7 +599,7 @@ def pem(
     # a bound held A: the simulation focus, enforce_stability=True, or the default from a
     # stable start (the core's rule)
     held = (focus == "simulation" or bool(enforce_stability)
-            or (enforce_stability is None and _radius(A) < 1.0))
+            or (enforce_stability is None and spectral_radius(A) < 1.0))
     insist = None  # the simulation focus held an unstable start stable: does the record insist?
     if focus == "simulation" and st.stabilized:
         from .held_stable import check_held_stable

@@ -42,6 +42,7 @@ import numpy as np
 
 from ..models.statespace import StateSpaceModel
 from ..models.uncertainty import ParameterUncertainty
+from .boundary import spectral_radius
 from .sandwich import MAX_ENTRIES, DeferredSandwich, _ar_fit, _weight_matrix
 
 __all__ = ["defer_prediction", "inverse_noise_response", "prediction_errors",
@@ -234,17 +235,13 @@ def state_space_sandwich(jacobians: Sequence[np.ndarray], A: Any, B: Any, C: Any
     with np.errstate(all="ignore"):
         e_hat = prediction_errors(A, B, C, D, K, records, x0s)
         shortest = min(np.shape(y)[0] for _, y in records)
-        rho = max(_radius(A), _radius(A - K @ C))
+        rho = max(spectral_radius(A), spectral_radius(A - K @ C))
         usable = rho < 1.0 and rho ** shortest < 1e-3
         dist = prediction_errors(A, B, C, D, K, records, x0s, simulation=True) if usable \
             else None
     return prediction_sandwich(
         jacobians, e_hat, dist,
         (lambda nfft: inverse_noise_response(A, K, C, nfft)) if usable else None, weights)
-
-
-def _radius(A: np.ndarray) -> float:
-    return float(np.max(np.abs(np.linalg.eigvals(A)), initial=0.0))
 
 
 _METHOD = "gauss-newton with coloured prediction errors (sandwich)"

@@ -240,7 +240,8 @@ def estimate_x0(model: Any, u: Any, y: Any = None, horizon: int | None = None) -
     return x0 if np.all(np.isfinite(x0)) else np.zeros(n)
 
 
-def fitted_simulation_errors(model: Any, u: np.ndarray, y: np.ndarray) -> np.ndarray:
+def fitted_simulation_errors(model: Any, u: np.ndarray, y: np.ndarray,
+                             simulated: np.ndarray | None = None) -> np.ndarray:
     """``y`` minus the linear state-space ``model``'s simulation of ``u`` from the initial
     state that fits ``y`` best (least squares, each output relative to its spread, as
     :func:`estimate_x0`; in the core, blockwise, no ``(N l, n)`` array, by QR where a growing
@@ -252,6 +253,8 @@ def fitted_simulation_errors(model: Any, u: np.ndarray, y: np.ndarray) -> np.nda
         A linear model (``A``, ``C`` and ``simulate``).
     u, y : ndarray, shape (N, m) and (N, l)
         One record.
+    simulated : ndarray, shape (N, l), optional
+        ``model``'s simulation of ``u`` from rest, when the caller has it already.
 
     Returns
     -------
@@ -270,7 +273,8 @@ def fitted_simulation_errors(model: Any, u: np.ndarray, y: np.ndarray) -> np.nda
     y = np.asarray(y, float)
     with warnings.catch_warnings(), np.errstate(all="ignore"):
         warnings.simplefilter("ignore")  # an unstable model's own warnings
-        ys = np.asarray(model.simulate(u), float).reshape(y.shape)
+        ys = np.asarray(model.simulate(u) if simulated is None else simulated,
+                        float).reshape(y.shape)
         if model.nstates == 0:
             return y - ys
         e = _sysid.fitted_errors(np.asarray(model.A, float), np.asarray(model.C, float), y, ys,
