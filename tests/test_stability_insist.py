@@ -201,3 +201,44 @@ def test_bj_and_polyest_say_when_the_data_insist_on_an_unstable_f(seed: int, pol
     assert any(f"the {method} model's F is held stable, but the data insist" in t
                and f"{method} keeps F stable" in t for t in said), said
     assert m.info["insisting"] and abs(m.info["insisting"][0]["pole"]) > 1.0
+
+
+@pytest.mark.parametrize("method", ["bj", "polyest"])
+@pytest.mark.parametrize("seed", [0, 7])
+def test_bj_and_polyest_say_when_the_growing_mode_went_into_the_noise_model(seed: int,
+                                                                            method: str) -> None:
+    # an unstable plant (poles 1.017 and 0.7, a 4-sample PRBS, 800 samples, output noise 40 dB
+    # below the first 200 samples): the fit put the growing pole in D (1 - 1.017 q^-1), where
+    # the predictor D/C cancels it, so the prediction errors are white and the free search
+    # over F does not insist; bj came back stable and silent (seed 0) or with a pole-zero
+    # cancellation warning (seed 7) while its simulation B/F misses the growth
+    rng = np.random.default_rng(seed)
+    u = np.repeat(rng.choice([-1.0, 1.0], 201), 4)[:800]
+    x, y = np.zeros(2), np.empty(800)
+    for t in range(800):
+        y[t] = 0.3 * x[0] + x[1]
+        x = np.array([1.017, 0.7]) * x + u[t]
+    d = sysid.IOData(u=u, y=y + y[:200].std() * 0.01 * rng.standard_normal(800), dt=1.0)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        m = sysid.bj(d, 2, 1, 1, 2, 1) if method == "bj" else sysid.polyest(d, 0, 2, 1, 1, 2, 1)
+    said = [str(w.message) for w in caught if issubclass(w.category, sysid.StabilityWarning)]
+    assert m.is_stable() and abs(np.roots(np.r_[1.0, m.d[0]])).max() > 1.01
+    assert len(caught) == 1 and any(
+        f"the {method} model's F is stable, but its noise model is not" in t
+        and "grows" in t and "sysid.ssest(data, order)" in t for t in said), said
+    assert m.info["growing_noise"]["growth"] > 10
+
+
+def test_no_word_on_a_noise_model_that_only_drifts() -> None:
+    # D's root on the bound (a random-walk disturbance: 1 - q^-1 within rounding) or a mode
+    # growing less than tenfold over the record is not a growing noise model
+    m = sysid.PolynomialModel([[[]]], [[[0.5]]], [[1]], 1.0, c=[[0.3]], d=[[-1.002]],
+                              f=[[[-0.5]]])
+    from sysid.polynomial.stability import warn_growing_noise
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert not warn_growing_noise(m, [np.array([-1.002])], "bj", 800)  # 4.9-fold
+        assert not warn_growing_noise(m, [np.array([-1.0])], "bj", 10**6)
+    assert "growing_noise" not in m.info

@@ -36,7 +36,7 @@ from .initial import record as _record_initial
 from .initial import simulator as _initial_simulator
 from .model import PolynomialModel
 from .orders import matlab_orders
-from .stability import warn_insisting_f
+from .stability import warn_growing_noise, warn_insisting_f
 from .starts import init_parameters, second_start
 from .uncertainty import attach_uncertainty as _attach_uncertainty
 from .uncertainty import defer_coloured
@@ -407,8 +407,9 @@ def _pem(
             if said:
                 found.append((f"{m.output_names[i]} <- {m.input_names[j]}", said))
             at += nf
-    insisting = method in ("oe", "bj", "polyest") and m.is_stable() and warn_insisting_f(
+    insisting = method in ("oe", "bj", "polyest") and m.is_stable() and (warn_insisting_f(
         m, exps, rs, na_v, nb_g, nc_v, nd_v, nf_g, nk_g, iters, method)
+        or warn_growing_noise(m, parts["d"], method, max(len(y) for _, y in exps)))
     if insisting:  # a stable fit of a plant the data say is unstable: its pole-zero pairs
         m.info["cancellations"] = found  # are the bound's doing; "lower nb, nf" misleads
     else:
