@@ -1,6 +1,7 @@
 """Whether the data insist on an unstable ``F`` where the search of ``oe``, ``bj`` or
-``polyest`` keeps every ``F`` stable (issue 26: a stable model unless the data insist, and
-then a StabilityWarning that names the pole and the option)."""
+``polyest`` keeps every ``F`` stable, and whether an unstable plant's growth went into the
+noise model ``C / D`` instead (issue 26: a stable model unless the data insist, and then a
+StabilityWarning that names the pole and the option)."""
 
 from __future__ import annotations
 
