@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import scipy.linalg as sla
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 from test_realization import THESIS_DT, pole_error, random_system, thesis_model
 
@@ -144,6 +144,11 @@ def test_bad_orders_and_non_minimal_models_are_rejected() -> None:
 def test_hankel_singular_values_are_invariant_to_a_change_of_basis(seed: int, scale: float) -> None:
     model = random_system(5, 2, 2, seed)
     t = np.eye(5) * scale + np.random.default_rng(seed).uniform(-0.3, 0.3, (5, 5))
+    # the transformed matrices carry rounding errors of about cond(t)^2 eps relative to the
+    # largest value, which the smallest value (336 times smaller for seed 0) magnifies: a basis
+    # of condition 3700 (seed 0, scale 1/3) moved it by 4e-6; the invariance is tested in
+    # bases that keep the arithmetic's share below the tolerance
+    assume(np.linalg.cond(t) < 300)
     other = sysid.StateSpaceModel(np.linalg.solve(t, model.A @ t), np.linalg.solve(t, model.B),
                                   model.C @ t, model.D)
     np.testing.assert_allclose(sysid.hankel_singular_values(other),
