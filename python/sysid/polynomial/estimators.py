@@ -30,7 +30,7 @@ from ..errors import DataError, InsufficientDataError, ShapeError, is_frd
 from ..validation.output_error import output_error
 from .arx_penalty import kernel_penalties, pair_penalties, penalised_fits
 from .cancellation import cancellation, warn_cancellations
-from .feedthrough import check_polynomial_feedthrough
+from .feedthrough import check_polynomial_feedthrough, left_out
 from .initial import check as _check_initial
 from .initial import record as _record_initial
 from .initial import simulator as _initial_simulator
@@ -135,14 +135,14 @@ def arx(
         return _integrated(m)
     exps = experiment_arrays(data)
     na, nb, nk = matlab_orders("arx", data, na, nb=nb, nk=nk)
-    check_offsets(data)
+    off = check_offsets(data)  # then its warning explains a poor simulation too
     require_inputs_vary(exps, "arx", getattr(data, "input_names", None))
     require_inputs_vary(exps, "arx", getattr(data, "output_names", None), side=1)
     ny, nu = exps[0][1].shape[1], exps[0][0].shape[1]
     na_g, nb_g, nk_g = _grid(na, ny, ny, "na"), _grid(nb, ny, nu, "nb"), _grid(nk, ny, nu, "nk")
     if isinstance(regularization, str) or hasattr(regularization, "prior"):
         return _warn_diverging(_arx_posterior(data, na_g, nb_g, nk_g, regularization, kernel),
-                               "arx")
+                               "arx", None if off else exps)
     if isinstance(regularization, (tuple, list)):
         if kernel is not None:
             raise DataError("kernel= goes with a numeric regularization; a (lam, R) pair "
@@ -150,7 +150,7 @@ def arx(
         lams, factors = pair_penalties(regularization, na_g, nb_g)
         m = _arx_model(data, penalised_fits(exps, na_g, nb_g, nk_g, lams, factors), nk_g)
         m.info["regularization"] = {"lam": lams}
-        return _warn_diverging(m, "arx")
+        return _warn_diverging(m, "arx", None if off else exps)
     if isinstance(regularization, bool) or not isinstance(regularization, (int, float, np.number)):
         raise DataError("regularization must be a number, a kernel name ('tc', 'ss', 'dc', "
                         f"'ridge'), a (lam, R) pair or an ArxRegularization, got "
@@ -166,7 +166,7 @@ def arx(
     ft = check_polynomial_feedthrough(exps, "arx", [max([*na_g[i], *nb_g[i]]) for i in range(ny)],
                                       nb_g, nk_g)
     m.info.update({} if ft is None else {"feedthrough_check": ft})
-    return _warn_diverging(m, "arx")
+    return _warn_diverging(m, "arx", None if off or left_out(ft) else exps)
 
 
 def _differenced(data: Any, integrate_noise: Any) -> IOData:
@@ -202,17 +202,19 @@ def _integrated(m: PolynomialModel) -> PolynomialModel:
     return m
 
 
-def _warn_diverging(m: PolynomialModel, method: str) -> PolynomialModel:
+def _warn_diverging(m: PolynomialModel, method: str, exps: Any = None) -> PolynomialModel:
     """``m``, with a :class:`sysid.StabilityWarning` when ``A`` has a pole on or outside the
     unit circle: its one-step predictor is stable, its simulation diverges (on the unshipped
     EMPS servo record ``arx(data, 2, 2, 1)`` returned a pole at 1 + 5e-5 silently, where
-    ``n4sid`` warned)."""
+    ``n4sid`` warned); a stable one that simulates ``exps`` poorly too (``free_run``)."""
     from ..models.checks import warn_unstable
+    from ..validation.free_run import linear_free_run
 
     warn_unstable(m, method, advice=(
         "Its one-step predictor is stable. Unless the process itself integrates or is "
         "unstable, use a model whose simulation is kept stable: sysid.oe, or "
         "sysid.ssest(data, order, focus='simulation')."))
+    linear_free_run(m, exps or [], method)
     return m
 
 

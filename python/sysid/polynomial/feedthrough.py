@@ -55,7 +55,7 @@ import numpy as np
 from .. import _sysid
 from ..subspace.feedthrough import CHECK_SAMPLES, LEFT_OUT_RATIO, _prediction_error
 
-__all__ = ["check_polynomial_feedthrough", "say_left_out"]
+__all__ = ["check_polynomial_feedthrough", "left_out", "say_left_out"]
 
 #: the fewest and the most poles per output of the check's ARX models
 CHECK_ORDER = (4, 10)
@@ -89,6 +89,18 @@ def _state_space_ratio(data: Any, order: int) -> float | None:
     except Exception:  # noqa: BLE001 - a check that cannot be made says nothing
         return None
     return without / with_ if with_ > 0 else np.inf
+
+
+def left_out(check: dict[str, Any] | None) -> bool:
+    """Whether :func:`check_polynomial_feedthrough` found a direct term left out (and said so).
+
+    Examples
+    --------
+    >>> from sysid.polynomial.feedthrough import left_out
+    >>> left_out(None), left_out({"shows": ""}), left_out({"shows": "y0 (5 times)"})
+    (False, False, True)
+    """
+    return bool(check and check.get("shows"))
 
 
 def check_polynomial_feedthrough(exps: list[tuple[np.ndarray, np.ndarray]], method: str,

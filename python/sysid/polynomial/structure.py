@@ -21,6 +21,7 @@ from .._checks import as_int, experiment_arrays, require_inputs_vary
 from ..data.iodata import as_record
 from ..data.offsets import check_offsets
 from ..errors import DataError, FeedthroughWarning, StabilityWarning
+from ..validation.free_run import skipped
 
 __all__ = ["StructureTable", "arxstruc", "selstruc", "struc"]
 
@@ -178,7 +179,7 @@ def _on_validation(data: Any, exps: list[Any], val: Any, nn: Any, extra: Any) ->
         if a + sum(b) == 0:
             continue
         try:
-            with warnings.catch_warnings(record=True) as caught:
+            with warnings.catch_warnings(record=True) as caught, skipped():
                 warnings.simplefilter("always")
                 model = arx(data, a, [b], [k])
         except DataError:
