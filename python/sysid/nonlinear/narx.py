@@ -155,9 +155,8 @@ def _free_run_rmse(model: NARXModel, exps: list[tuple[np.ndarray, np.ndarray]]) 
 
 
 #: what to do when a NARX model's free run fails on its own estimation data
-_SIMULATE = ("To simulate, keep fewer terms (criterion='bic'), a lower degree or shorter lags, "
-             "or fit for simulation (nlarx with a SigmoidNetwork and focus='simulation', nlhw, "
-             "pnlss)")
+_SIMULATE = ("keep fewer terms (criterion='bic'), a lower degree or shorter lags, or fit for "
+             "simulation (nlarx with a SigmoidNetwork and focus='simulation', nlhw, pnlss)")
 
 
 def free_run_check(model: Any, exps: list[tuple[np.ndarray, np.ndarray]]) -> None:
@@ -165,25 +164,24 @@ def free_run_check(model: Any, exps: list[tuple[np.ndarray, np.ndarray]]) -> Non
     ``max_lag`` outputs of each experiment) and record it in ``model.info["free_run"]``;
     warn (:class:`~sysid.StabilityWarning`) when the simulation diverges, and
     (:func:`sysid.validation.free_run.warn_poor_simulation`) when it simulates an output
-    worse than its mean. A NARX model is
-    fitted one step ahead, where the measured outputs hold it; run on its own outputs it can
-    blow up even on the data it was fitted to (a degree-3 polynomial model on the pH record
-    did, and said nothing until ``compare`` reported ``-inf``)."""
+    worse than its mean. A NARX model is fitted one step ahead, where the measured outputs
+    hold it; run on its own outputs it can blow up even on the data it was fitted to (a
+    degree-3 polynomial model on the pH record did, and said nothing until ``compare``
+    reported ``-inf``), or just miss (the flutter record's degree-2 model: -1986 %)."""
     sse, var, i = _free_run(model, exps)
     if sse is None:
         model.info["free_run"] = {"diverged": True, "experiment": i, "reason": var}
         warnings.warn(StabilityWarning(
             f"nlarx: the model's free-run simulation diverges on its own estimation data "
             f"(experiment {i}: {var}). It is fitted for one-step prediction, which it still "
-            "does; t" + _SIMULATE[1:]), stacklevel=user_stacklevel())
+            "does; to simulate, " + _SIMULATE), stacklevel=user_stacklevel())
         return
     fit = 100.0 * (1.0 - np.sqrt(sse / np.maximum(var, 1e-300)))
     model.info["free_run"] = {"diverged": False, "fit": fit.tolist()}
-    # run free it may also just miss: the flutter record's degree-2 fit simulated its own
-    # data at -1986 % (validation -54444 %) without a word
-    # (a model without input terms has its own warning: its simulation is a constant)
+    # a model without input terms has its own warning (its simulation is a constant)
     if getattr(model, "ninputs", 0) and (not hasattr(model, "terms") or _uses_input(model)):
-        warn_poor_simulation("nlarx", fit, list(model.output_names), _SIMULATE)
+        warn_poor_simulation("nlarx", fit, list(model.output_names),
+                             "To simulate, " + _SIMULATE + ".")
 
 
 @one_blas_thread
