@@ -37,8 +37,8 @@ _SKIP: contextvars.ContextVar[bool] = contextvars.ContextVar("sysid_free_run_ski
 @contextlib.contextmanager
 def skipped() -> Iterator[None]:
     """Within it, :func:`linear_free_run` does nothing: for fits made as a step of another
-    method (``arxstruc``'s rows, scored one step ahead; the differenced record of
-    ``arx(..., integrate_noise=True)``), whose simulation is not the user's model's.
+    method, whose simulation is not the user's model's (``arxstruc``'s rows, scored one step
+    ahead; the quick ARX fits of ``advice`` and ``ssregest``).
 
     Examples
     --------
@@ -119,6 +119,7 @@ def linear_free_run(model: Any, exps: list[tuple[np.ndarray, np.ndarray]], metho
     >>> np.round(m.info["free_run"]["fit"], 6).tolist()
     [100.0]
     """
+    from ..pem.boundary import spectral_radius
     from .runner import fitted_simulation_errors
 
     if _SKIP.get() or not exps or exps[0][0].shape[1] == 0:
@@ -126,8 +127,8 @@ def linear_free_run(model: Any, exps: list[tuple[np.ndarray, np.ndarray]], metho
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         ss = model.to_statespace() if hasattr(model, "to_statespace") else model
-        poles = np.asarray(ss.poles(), complex) if ss.nstates else np.zeros(0)
-    if ss.nstates == 0 or not np.all(np.isfinite(poles)) or np.abs(poles).max() >= 1.0:
+    A = np.asarray(ss.A, float)
+    if ss.nstates == 0 or not np.all(np.isfinite(A)) or spectral_radius(A) >= 1.0:
         return
     sse, var = 0.0, 0.0
     for u, y in exps:
