@@ -170,6 +170,12 @@ class DecoupledPNLSSModel(LinearPart, ModelMixin):
                 f"degrees={self.degrees}, dt={self.dt:g})")
 
 
+def n_parameters(n: int, m: int, l_: int, branches: int, n_degrees: int) -> int:
+    """Parameters of a decoupled model: ``A, B, C, D``, and per branch its direction, its
+    state and output weights and one coefficient per degree, plus the constant terms."""
+    return n * n + n * m + l_ * n + l_ * m + branches * (2 * n + m + n_degrees) + n + l_
+
+
 def fit_decoupled(lin: StateSpaceModel, us: list[np.ndarray], recs: list[tuple[Any, ...]],
                   degrees: list[int], branches: int, clamp: bool, max_iter: int, tol: float,
                   progress: Any, seed: int = 0, weights: Any = None,
@@ -188,7 +194,7 @@ def fit_decoupled(lin: StateSpaceModel, us: list[np.ndarray], recs: list[tuple[A
     if r < 1:
         raise DataError(f"branches must be a positive integer, got {branches!r}")
     nd = len(degrees)
-    check_parameters(n * n + n * m_ + l_ * n + l_ * m_ + r * (2 * n + m_ + nd) + n + l_, recs,
+    check_parameters(n_parameters(n, m_, l_, r, nd), recs,
                      "branches, the degrees or the order")
     Z = np.hstack([np.vstack(linear_states(lin, us)), np.vstack(us)])
 

@@ -225,9 +225,10 @@ def pnlss(
         (``[3]``: cubic terms only). ``"auto"`` (default): degrees 2, or 2-3 where blocks of
         the estimation record held out of the fit insist on the cubic terms by their
         simulation fit (:mod:`sysid.nlss.degree`: cubic terms that fit the record can run away
-        on data in other ranges); it costs two fits per block (five blocks on most records)
-        and ``info["degree_choice"]`` holds the table and the reason. Give the degree to fit
-        once.
+        on data in other ranges; degrees 2-3 are not tried where the record gives fewer than
+        ten residuals per parameter); it costs two fits per block (five blocks on most
+        records) and ``info["degree_choice"]`` holds the table and the reason. Give the
+        degree to fit once.
     terms : {"full", "states", "inputs", "outputs"}
         Variables of the state-equation monomials ``zeta``: states and inputs, states only,
         inputs only, or ``"outputs"``: the inputs and the ``noutputs`` states that the
@@ -572,7 +573,8 @@ def _auto_degree(data: IOData, n: int, kw: dict[str, Any], progress: Any) -> Any
 
     from .._checks import user_stacklevel
     from ..validation.crossval import fold_count
-    from .degree import CANDIDATES, choose_degree, insists
+    from .decoupled import n_parameters
+    from .degree import CANDIDATES, PER_PARAMETER, choose_degree, insists
 
     def linear(part: IOData) -> PNLSSModel:
         """The part's linear start (as ``pnlss`` fits it), a model without monomials."""
@@ -587,14 +589,25 @@ def _auto_degree(data: IOData, n: int, kw: dict[str, Any], progress: Any) -> Any
         init = kw["init"] if start is None else start.linear()
         return pnlss(part, n, degree=k, progress=False, **{**kw, "init": init})
 
+    def size(k: int) -> int:
+        m_, l_, degs = data.n_inputs, data.n_outputs, _degrees(k)
+        if kw["branches"] is not None:
+            return n_parameters(n, m_, l_, kw["branches"], len(degs))
+        ot = kw["terms"] if kw["output_terms"] is None else kw["output_terms"]
+        eta = 0 if ot == "none" else len(_monomials(n, m_, l_, ot, degs))
+        return ((n + l_) * (n + m_) + n * (1 + len(_monomials(n, m_, l_, kw["terms"], degs)))
+                + l_ * (1 + eta))
+
     # a bar over the fold fits (a progress callable follows the final fit's iterations)
-    total = (len(CANDIDATES) + 1) * fold_count(data)
+    total = fold_count(data) * (2 + sum(size(k) * PER_PARAMETER <= sum(data.lengths)
+                                        * data.n_outputs for k in CANDIDATES[1:]))
     cb, close = iteration_callback(False if callable(progress) else progress,
                                    "pnlss degree choice", total, _fold_line, unit="fit",
                                    postfix=lambda i, f, *a: {"held-out fit": f"{f:.1f} %"})
     try:
         choice = choose_degree(data, fit, linear,
-                               None if cb is None else (lambda i, f: cb(i, f, 0.0, 0.0, 0.0)))
+                               None if cb is None else (lambda i, f: cb(i, f, 0.0, 0.0, 0.0)),
+                               size)
     finally:
         close()
     t = choice.table
