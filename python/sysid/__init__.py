@@ -86,7 +86,7 @@ _LAZY = {
     "greyest": "greybox.greyest",
     "param": "greybox.greybox",
     "armax": "polynomial.estimators",
-    "arx": "polynomial.estimators",
+    "arx": "polynomial.arx",
     "arxstruc": "polynomial.structure",
     "struc": "polynomial.structure",
     "arxregul": "polynomial.arxregul",

@@ -43,7 +43,7 @@ def augmented_fit(data: Any, functions: Sequence[Any], *, method: str = "n4sid",
     """
     aug = augment_inputs(data, functions)
     if method == "arx":
-        from ..polynomial.estimators import arx
+        from ..polynomial.arx import arx
 
         if na is None or nb is None:
             raise DataError("method='arx' needs na and nb")

@@ -174,7 +174,7 @@ def pem_polynomial(data: Any, model: PolynomialModel, *, max_iter: int,
     ny = model.n_outputs
     if not any(nc[i] or nd[i] or any(nf[i]) for i in range(ny)):
         # ARX: the least-squares fit is the prediction-error minimum (a coupled A too)
-        from .estimators import arx
+        from .arx import arx
 
         m = arx(data, na, nb, nk)
         m.info = dict(m.info or {}, start="init",

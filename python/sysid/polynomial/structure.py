@@ -143,7 +143,7 @@ def _per_input(rows: np.ndarray, m: int) -> np.ndarray:
 
 def _on_validation(data: Any, exps: list[Any], val: Any, nn: Any, extra: Any) -> np.ndarray:
     """MATLAB's ``arxstruc(ze, zv, NN)``: each row fitted on ``data``, scored on ``val``."""
-    from .estimators import arx
+    from .arx import arx
 
     if extra is not None:
         raise DataError("arxstruc(ze, zv, NN) takes the structures as one array NN (rows "

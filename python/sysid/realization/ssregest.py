@@ -68,8 +68,8 @@ def _big_model(data: Any, na: int, kernel: str, nk: int, reg: Any = None
                ) -> tuple[StateSpaceModel, Any]:
     """The regularised ARX model's innovations form and its regularisation (tuned on
     ``data`` by empirical Bayes unless ``reg`` is given)."""
+    from ..polynomial.arx import arx
     from ..polynomial.arxregul import arxregul
-    from ..polynomial.estimators import arx
     from ..validation.free_run import skipped
 
     ny, nu = data.n_outputs, data.n_inputs

@@ -307,7 +307,7 @@ def _monomials(x: np.ndarray) -> np.ndarray:
 def _nonlinearity(data: Any, nk: np.ndarray | None) -> Finding:
     from scipy import stats
 
-    from ..polynomial.estimators import arx
+    from ..polynomial.arx import arx
     from .free_run import skipped
 
     if data.n_inputs == 0:
