@@ -138,3 +138,18 @@ def test_a_given_degree_fits_once_and_a_wrong_word_is_refused():
     wrong = sysid.StateSpaceModel(0.5 * np.eye(3), np.ones((3, 1)), np.ones((1, 3)), [[0.0]])
     with pytest.raises(DataError, match="init has 3 states"):
         sysid.pnlss(d, 2, init=wrong, progress=False)
+
+
+def test_a_step_test_is_refused_for_the_record_not_for_a_held_out_part():
+    """An input that changes once, at sample 1 (a step test): the automatic degree's first
+    part (the record less its first block) has a constant input, and that part's refusal
+    ("input u0 is constant") was what pnlss raised. The record's own linear start is now
+    fitted first, and its refusal names the step test."""
+    rng = np.random.default_rng(0)
+    u = np.ones((600, 1))
+    u[0] = 0.0
+    y = np.zeros((600, 1))
+    for t in range(1, 600):
+        y[t] = 0.9 * y[t - 1] + 0.1 * u[t - 1] + 0.01 * rng.standard_normal()
+    with pytest.raises(sysid.ExcitationError, match="a step test"):
+        sysid.pnlss(sysid.IOData(u, y, 1.0), 2, progress=False)

@@ -48,6 +48,8 @@ pub struct PnlssStructure {
     eta: Terms2,
     #[pyo3(default)]
     range: Range,
+    #[pyo3(default)]
+    stable: bool,
 }
 
 impl PnlssStructure {
@@ -60,6 +62,11 @@ impl PnlssStructure {
             Monomials::from_terms(nx, nu, self.zeta).py()?,
             Monomials::from_terms(nx, nu, self.eta).py()?,
         );
+        let m = if self.stable {
+            m.with_stable_linear()
+        } else {
+            m
+        };
         with_range(m, self.range, Pnlss::with_range)
     }
 }
@@ -74,12 +81,19 @@ pub struct DecoupledStructure {
     degrees: Vec<usize>,
     #[pyo3(default)]
     range: Range,
+    #[pyo3(default)]
+    stable: bool,
 }
 
 impl DecoupledStructure {
     fn model(self) -> PyResult<Decoupled> {
         let (nx, nu, ny) = self.dims;
         let m = Decoupled::new(nx, nu, ny, self.branches, self.degrees).py()?;
+        let m = if self.stable {
+            m.with_stable_linear()
+        } else {
+            m
+        };
         with_range(m, self.range, Decoupled::with_range)
     }
 }

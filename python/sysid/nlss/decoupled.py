@@ -32,6 +32,7 @@ from .common import (
     clamp_box,
     envelope,
     fit_summary,
+    held_stable,
     linear_states,
     signal,
 )
@@ -211,12 +212,12 @@ def fit_decoupled(lin: StateSpaceModel, us: list[np.ndarray], recs: list[tuple[A
     # diverging steps instead, and the returned model clamps to the range its own arguments
     # cover on the estimation data.
     struct = {"dims": (n, m_, l_), "branches": r, "degrees": degrees}
-    def fit(th0: np.ndarray, it: int) -> dict[str, Any]:
+    def fit(th0: np.ndarray, it: int, st: dict[str, Any] = struct) -> dict[str, Any]:
         if weights is None:
-            return _sysid.pnlss_estimate(struct, recs, th0, max_iter=it, tol=tol,
+            return _sysid.pnlss_estimate(st, recs, th0, max_iter=it, tol=tol,
                                          progress=progress, iterates=True,
                                          significance=significance)
-        return _sysid.pnlss_estimate_weighted(struct, recs, weights, th0, max_iter=it, tol=tol,
+        return _sysid.pnlss_estimate_weighted(st, recs, weights, th0, max_iter=it, tol=tol,
                                               progress=progress, iterates=True)
 
     trials = []
@@ -241,6 +242,10 @@ def fit_decoupled(lin: StateSpaceModel, us: list[np.ndarray], recs: list[tuple[A
         res["evaluations"] += best["evaluations"]
         res["history"] = list(best["history"]) + list(res["history"])[1:]
         res["iterates"] = np.vstack([best["iterates"], res["iterates"]])
+    if clamp and not cancelled:  # the returned model clamps: an unstable A runs away
+        stable = {**struct, "stable": True}
+        res = held_stable(res, n, lambda th0, it: fit(th0, it, stable), max_iter,
+                          max(r[0].shape[0] for r in recs))
 
     def kw_of(th: np.ndarray) -> dict[str, Any]:
         o = np.cumsum([0, n * n, n * m_, l_ * n, l_ * m_, r * (n + m_), n * r, r * nd, n, l_])

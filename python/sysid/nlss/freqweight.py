@@ -1,4 +1,5 @@
-"""The frequency weighting of a PNLSS fit on periodic records.
+"""The frequency weighting of a PNLSS fit on periodic records, and ``pnlss``'s other handling
+of them (its ``periods=`` per experiment, ``average=True``'s averaged periods).
 
 On periodic data the classic PNLSS cost (Paduart et al., Automatica 46, 2010) is the
 simulation error of the steady state, averaged over the periods, on the DFT lines of one
@@ -16,12 +17,15 @@ Rust core evaluates the cost and its Gauss-Newton terms.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from ..data.iodata import IOData
+from ..errors import DataError
 from ..nonparametric.bla import _periods
 
-__all__ = ["line_weights"]
+__all__ = ["averaged_periods", "cost_weights", "experiment_periods", "line_weights"]
 
 SMOOTH = 4  # the variance of each line is averaged with this many excited neighbours per side
 FLOOR = 1e-10  # relative to the output's mean line power: noise-free data weigh lines alike
@@ -76,3 +80,48 @@ def _smooth(s2: np.ndarray) -> np.ndarray:
     i = np.arange(body.shape[0])
     lo, hi = np.maximum(i - SMOOTH, 0), np.minimum(i + SMOOTH + 1, body.shape[0])
     return np.vstack([s2[:1], (c[hi] - c[lo]) / (hi - lo)[:, None]])
+
+
+def cost_weights(weighting: str, sd: IOData, pers: list[int] | None, recs: list[Any],
+             averaged: bool) -> Any:
+    """The lines and weights of the frequency-weighted cost, or ``None`` (time domain)."""
+    if weighting == "none":
+        return None
+    if pers is None or averaged:
+        raise DataError("weighting='bla' needs periods= and the whole records, not "
+                        "average=True (give periods=, drop average=, or use 'none')")
+    w = line_weights(sd, pers, [r[2] for r in recs])
+    if w is None:
+        raise DataError("weighting='bla' needs at least two whole periods after a transient "
+                        "of whole periods in every experiment; give more periods, a "
+                        "transient= of whole periods, or weighting='none'")
+    return w
+
+
+def experiment_periods(periods: Any, n_exp: int) -> list[int] | None:
+    """``periods=`` of a fit as one period length per experiment (``None``: not periodic)."""
+    if periods is None:
+        return None
+    ps = [periods] * n_exp if np.ndim(periods) == 0 else list(periods)
+    if len(ps) != n_exp or not all(isinstance(p, (int, np.integer)) and p >= 1 for p in ps):
+        raise DataError(f"periods must be a positive integer or one per experiment ({n_exp}), "
+                        f"got {periods!r}")
+    return [int(p) for p in ps]
+
+
+def averaged_periods(sd: IOData, pers: list[int] | None) -> list[Any]:
+    """Each experiment's average over its periods after the first, twice (the first copy the
+    transient)."""
+    if not pers or min(pers) < 2:
+        raise DataError("average=True needs periods= of at least 2 (the first is dropped)")
+    out = []
+    for (u, y), p in zip(sd.experiments, pers):
+        N = u.shape[0]
+        if N % p:
+            raise DataError(f"an experiment of {N} samples is not {p} whole periods")
+        P = N // p
+        ua = u[P:].reshape(p - 1, P, -1).mean(axis=0)
+        ya = y[P:].reshape(p - 1, P, -1).mean(axis=0)
+        out.append((np.ascontiguousarray(np.vstack([ua, ua])),
+                    np.ascontiguousarray(np.vstack([ya, ya])), P))
+    return out

@@ -39,12 +39,14 @@ from .common import (
     clamp_box,
     envelope,
     fit_summary,
+    held_stable,
     linear_start,
     linear_states,
     scaled_data,
     settle_samples,
     signal,
 )
+from .freqweight import averaged_periods, cost_weights, experiment_periods
 from .memory import check_memory
 from .selection import ValidationRecords, select_iterate, validation_records
 from .startup import StartUp
@@ -267,7 +269,10 @@ def pnlss(
         cover on the estimation data, widened by a tenth of its span (inside the fit's box,
         so the fit's simulation is unchanged). Beyond it the nonlinear terms keep their
         boundary values instead of growing as powers: records that leave the estimation
-        range stay bounded. ``"polynomial"``: plain monomials everywhere.
+        range stay bounded, the linear part held stable for that (a free search that ends
+        with an unstable ``A`` is continued from its latest stable iterate with ``A`` kept
+        stable; ``info["fit"]["held_stable"]``). ``"polynomial"``: plain monomials
+        everywhere.
     branches : int, optional
         Fit the decoupled variant instead (:class:`~sysid.DecoupledPNLSSModel`): the state
         equation's polynomial is ``W g(V [x; u])``, ``branches`` univariate polynomials of
@@ -387,7 +392,7 @@ def pnlss(
                             f"shorter transient")
     sc = Scaling.of(data)
     sd = scaled_data(data, sc)
-    pers = _periods(periods, len(sd.experiments))
+    pers = experiment_periods(periods, len(sd.experiments))
     one = periods if pers is not None and np.ndim(periods) == 0 else None
     if terms not in _TERMS or (output_terms is not None and output_terms not in _TERMS
                                  + ("none",)):
@@ -397,13 +402,6 @@ def pnlss(
         raise DataError(f"extrapolation must be 'clamp' or 'polynomial', got {extrapolation!r}")
     if weighting not in ("bla", "none"):
         raise DataError(f"weighting must be 'none' or 'bla', got {weighting!r}")
-    choice = None
-    if isinstance(degree, str):
-        choice = _auto_degree(data, n, dict(terms=terms, output_terms=output_terms, init=init,
-                                            extrapolation=extrapolation, branches=branches,
-                                            seed=seed, max_iter=max_iter, tol=tol,
-                                            significance=significance), progress)
-        degs = _degrees(choice.degree)
     lin = linear_start(data, sd, sc, n, init, one)
     if "outputs" in (terms, output_terms):
         lin = _output_basis(lin)
@@ -411,6 +409,13 @@ def pnlss(
     if np.max(np.abs(lin.poles())) >= 1:
         raise DataError("the linear start is unstable: its simulation cannot seed a "
                         "simulation-error fit; give a stable init= or another order")
+    choice = None  # after the record's own start: what it refuses is said of the record
+    if isinstance(degree, str):
+        choice = _auto_degree(data, n, dict(terms=terms, output_terms=output_terms, init=init,
+                                            extrapolation=extrapolation, branches=branches,
+                                            seed=seed, max_iter=max_iter, tol=tol,
+                                            significance=significance), progress)
+        degs = _degrees(choice.degree)
     us = [u for u, _ in sd.experiments]
     recs = []
     for k, (u, y) in enumerate(sd.experiments):
@@ -418,11 +423,11 @@ def pnlss(
         skip = transient if transient is not None else (
             N // pers[k] if pers and pers[k] > 1 else settle_samples(lin, N))
         recs.append((u, y, int(skip)))
-    weights = _weights(weighting, sd, pers, recs, average)
+    weights = cost_weights(weighting, sd, pers, recs, average)
     # the start from rest over each transient, judged on the records as measured
     startup = None if average else StartUp.of(lin, recs, data)
     if average:
-        recs = _averaged(sd, pers)
+        recs = averaged_periods(sd, pers)
         us = [r[0] for r in recs]
     cb, close = iteration_callback(progress, "pnlss", max_iter,
                                    iteration_printer("pnlss", "sum of squares"))
@@ -453,6 +458,7 @@ def pnlss(
     finally:
         close()
     info["fit"] = _report(res, recs)
+    _said_held(res, max(r[0].shape[0] for r in recs))
     build = lambda th: cls(**kw_of(th), **common,  # noqa: E731
                            info={**info, "fit": dict(info["fit"])})
     if val_recs is not None:
@@ -646,13 +652,19 @@ def _fit_coupled(lin: StateSpaceModel, us: list[np.ndarray], recs: list[Any], te
                              np.zeros(n * len(zeta) + l_ * len(eta))])
     struct = {"nx": n, "nu": m_, "ny": l_, "zeta": zeta, "eta": eta, "range": rng}
     check_parameters(theta0.size, recs, "the degree, the terms or the order")
-    if weights is None:
-        res = _sysid.pnlss_estimate(struct, recs, theta0, max_iter=max_iter, tol=tol,
-                                    progress=cb, iterates=True, significance=significance)
-    else:
-        res = _sysid.pnlss_estimate_weighted(struct, recs, weights, theta0, max_iter=max_iter,
-                                             tol=tol, progress=cb, iterates=True)
+
+    def search(st: dict[str, Any], th0: np.ndarray, it: int) -> dict[str, Any]:
+        if weights is None:
+            return _sysid.pnlss_estimate(st, recs, th0, max_iter=it, tol=tol, progress=cb,
+                                         iterates=True, significance=significance)
+        return _sysid.pnlss_estimate_weighted(st, recs, weights, th0, max_iter=it, tol=tol,
+                                              progress=cb, iterates=True)
+
+    res = search(struct, theta0, max_iter)
     res["iterates"] = np.vstack([theta0[None, :], np.asarray(res["iterates"])])
+    if fit_box is not None:  # clamped monomials: an unstable A runs away outside the box
+        res = held_stable(res, n, lambda th0, it: search({**struct, "stable": True}, th0, it),
+                          max_iter, max(r[0].shape[0] for r in recs))
 
     def kw_of(th: np.ndarray) -> dict[str, Any]:
         box = None
@@ -701,52 +713,6 @@ def _output_basis(m: StateSpaceModel) -> StateSpaceModel:
     return StateSpaceModel(Ti @ m.A @ T, Ti @ m.B, C @ T, m.D, dt=m.dt)
 
 
-def _weights(weighting: str, sd: IOData, pers: list[int] | None, recs: list[Any],
-             averaged: bool) -> Any:
-    """The lines and weights of the frequency-weighted cost, or ``None`` (time domain)."""
-    if weighting == "none":
-        return None
-    if pers is None or averaged:
-        raise DataError("weighting='bla' needs periods= and the whole records, not "
-                        "average=True (give periods=, drop average=, or use 'none')")
-    from .freqweight import line_weights
-
-    w = line_weights(sd, pers, [r[2] for r in recs])
-    if w is None:
-        raise DataError("weighting='bla' needs at least two whole periods after a transient "
-                        "of whole periods in every experiment; give more periods, a "
-                        "transient= of whole periods, or weighting='none'")
-    return w
-
-
-def _periods(periods: Any, n_exp: int) -> list[int] | None:
-    if periods is None:
-        return None
-    ps = [periods] * n_exp if np.ndim(periods) == 0 else list(periods)
-    if len(ps) != n_exp or not all(isinstance(p, (int, np.integer)) and p >= 1 for p in ps):
-        raise DataError(f"periods must be a positive integer or one per experiment ({n_exp}), "
-                        f"got {periods!r}")
-    return [int(p) for p in ps]
-
-
-def _averaged(sd: IOData, pers: list[int] | None) -> list[Any]:
-    """Each experiment's average over its periods after the first, twice (the first copy the
-    transient)."""
-    if not pers or min(pers) < 2:
-        raise DataError("average=True needs periods= of at least 2 (the first is dropped)")
-    out = []
-    for (u, y), p in zip(sd.experiments, pers):
-        N = u.shape[0]
-        if N % p:
-            raise DataError(f"an experiment of {N} samples is not {p} whole periods")
-        P = N // p
-        ua = u[P:].reshape(p - 1, P, -1).mean(axis=0)
-        ya = y[P:].reshape(p - 1, P, -1).mean(axis=0)
-        out.append((np.ascontiguousarray(np.vstack([ua, ua])),
-                    np.ascontiguousarray(np.vstack([ya, ya])), P))
-    return out
-
-
 def _report(res: dict[str, Any], recs: list[Any]) -> dict[str, Any]:
     return {"iterations": res["iterations"], "evaluations": res["evaluations"],
             # the decoupled fit's random starts, the ones not returned too
@@ -755,7 +721,32 @@ def _report(res: dict[str, Any], recs: list[Any]) -> dict[str, Any]:
             "cost": list(res["history"]), "stop": res["stop"],
             "remaining_decrease": float(res["remaining_decrease"]),
             "n_parameters": int(np.asarray(res["theta"]).size),
-            "transient": [r[2] for r in recs]}
+            "transient": [r[2] for r in recs],
+            **({"held_stable": res["held_stable"]} if "held_stable" in res else {})}
+
+
+def _said_held(res: dict[str, Any], samples: int) -> None:
+    """A :class:`StabilityWarning` when the search held the linear part stable
+    (:func:`~sysid.nlss.common.held_stable`): the free search's pole, its growth over the
+    record, both costs and the option that returns the free model."""
+    import warnings
+
+    from .._checks import user_stacklevel
+    from ..errors import StabilityWarning
+
+    if "held_stable" not in res:
+        return
+    h, cost = res["held_stable"], res["history"][-1]
+    growth = float(np.exp(min(samples * np.log(h["free_radius"]), 700.0)))
+    warnings.warn(f"pnlss: the free search's linear part reached a pole of modulus "
+                  f"{modulus(h['free_radius'])}, a mode that grows "
+                  f"{growth:.2g}-fold over the record, which the clamped "
+                  f"monomials cannot hold once the state leaves the range they were fitted "
+                  f"on; returned the search continued from iteration {h['from_iteration']} "
+                  f"with the linear part held stable (cost {cost:.6g} against the free "
+                  f"{h['free_cost']:.6g}; info['fit']['held_stable']). For a process that "
+                  f"is itself unstable or bistable, extrapolation='polynomial' returns the "
+                  f"free model", StabilityWarning, stacklevel=user_stacklevel())
 
 
 def _warn_unstable(model: Any) -> Any:

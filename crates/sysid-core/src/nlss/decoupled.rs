@@ -49,6 +49,8 @@ pub struct Decoupled {
     pub lo: Vec<f64>,
     /// Upper ends of that box.
     pub hi: Vec<f64>,
+    /// Whether a fit keeps the linear part's `A` stable (see [`Decoupled::with_stable_linear`]).
+    pub stable_linear: bool,
 }
 
 #[derive(Clone, Copy)]
@@ -102,7 +104,21 @@ impl Decoupled {
             bound: 1e8,
             lo: Vec::new(),
             hi: Vec::new(),
+            stable_linear: false,
         })
+    }
+
+    /// The model whose fits keep the spectral radius of the linear part's `A` below 1
+    /// (as [`crate::nlss::Pnlss::with_stable_linear`]).
+    ///
+    /// ```
+    /// use sysid_core::nlss::Decoupled;
+    /// let m = Decoupled::new(2, 1, 1, 1, vec![2]).unwrap().with_stable_linear();
+    /// assert!(m.stable_linear);
+    /// ```
+    pub fn with_stable_linear(mut self) -> Self {
+        self.stable_linear = true;
+        self
     }
 
     /// The model with the branch arguments clamped to `lo <= s <= hi` (one pair per branch).
@@ -169,6 +185,10 @@ impl NonlinearTerms for Decoupled {
 
     fn bound(&self) -> f64 {
         self.bound
+    }
+
+    fn stable_linear(&self) -> bool {
+        self.stable_linear
     }
 
     fn work(&self) -> Work {

@@ -239,6 +239,14 @@ impl<M: NonlinearTerms> Problem for WeightedProblem<'_, M> {
             jacobian,
         ))
     }
+
+    fn admissible(&mut self, theta: &[f64]) -> bool {
+        simulation::linear_admissible(self.model, theta)
+    }
+
+    fn bound_margin(&mut self, theta: &[f64]) -> Option<f64> {
+        simulation::linear_margin(self.model, theta)
+    }
 }
 
 /// The frequency-weighted cost of `theta` on the records (for reports and tests); infinite

@@ -37,6 +37,8 @@ pub struct Pnlss {
     pub lo: Vec<f64>,
     /// Upper ends of that box.
     pub hi: Vec<f64>,
+    /// Whether a fit keeps the linear part's `A` stable (see [`Pnlss::with_stable_linear`]).
+    pub stable_linear: bool,
 }
 
 /// One record: inputs `u` (`N x nu` row-major), outputs `y` (`N x ny` row-major), and the
@@ -83,7 +85,23 @@ impl Pnlss {
             bound: 1e8,
             lo: Vec::new(),
             hi: Vec::new(),
+            stable_linear: false,
         }
+    }
+
+    /// The model whose fits ([`estimate`]) keep the spectral radius of the linear part's `A`
+    /// below 1: a step that would leave that set is turned along its boundary or shortened.
+    /// With clamped monomials ([`Pnlss::with_range`]) an unstable `A` runs away as soon as
+    /// the state leaves the box, whatever the nonlinear terms do inside it.
+    ///
+    /// ```
+    /// use sysid_core::nlss::{Monomials, Pnlss};
+    /// let m = Pnlss::new(1, 1, 1, Monomials::empty(2), Monomials::empty(2)).with_stable_linear();
+    /// assert!(m.stable_linear);
+    /// ```
+    pub fn with_stable_linear(mut self) -> Self {
+        self.stable_linear = true;
+        self
     }
 
     /// The model with the monomials evaluated at `z = [x; u]` clamped to the box
@@ -160,6 +178,10 @@ impl NonlinearTerms for Pnlss {
 
     fn bound(&self) -> f64 {
         self.bound
+    }
+
+    fn stable_linear(&self) -> bool {
+        self.stable_linear
     }
 
     fn work(&self) -> Work {

@@ -13,6 +13,7 @@
 
 use super::PnlssData;
 use crate::error::{Result, SysidError};
+use crate::linalg::spectral_radius;
 use crate::optim::{
     gram_add, minimize, mirror_lower, Evaluation, Flow, Iteration, Options, Problem, Solution,
 };
@@ -36,6 +37,11 @@ pub(super) trait NonlinearTerms {
     fn n_params(&self) -> usize;
     /// A state beyond this in absolute value has diverged.
     fn bound(&self) -> f64;
+    /// Whether a fit keeps the linear part's `A` (the first `nx * nx` parameters, row-major)
+    /// stable: [`linear_margin`] bounds the search's admissible set.
+    fn stable_linear(&self) -> bool {
+        false
+    }
     /// Fresh work buffers.
     fn work(&self) -> Self::Work;
     /// Adds the nonlinear terms at `x, u` to `y` (holding `C x + D u`) and `xn` (holding
@@ -367,6 +373,27 @@ struct SimulationError<'a, M> {
     data: &'a [PnlssData<'a>],
 }
 
+/// How far the spectral radius of the linear part's `A` (the first `nx * nx` parameters,
+/// row-major) lies above 1 when the model keeps it stable; `None` when it does not, or when
+/// the eigenvalue solve fails or gives NaN (then the point is not admissible).
+pub(super) fn linear_margin<M: NonlinearTerms>(model: &M, theta: &[f64]) -> Option<f64> {
+    let n = model.dims().0;
+    if !model.stable_linear() || n == 0 || theta.len() < n * n {
+        return None;
+    }
+    let a = faer::MatRef::from_row_major_slice(&theta[..n * n], n, n);
+    spectral_radius(a)
+        .ok()
+        .filter(|r| !r.is_nan())
+        .map(|r| r - 1.0)
+}
+
+/// Whether `theta` lies in the admissible set of a model that keeps its linear part stable
+/// (always, for one that does not).
+pub(super) fn linear_admissible<M: NonlinearTerms>(model: &M, theta: &[f64]) -> bool {
+    !model.stable_linear() || linear_margin(model, theta).is_some_and(|m| m < 0.0)
+}
+
 impl<M: NonlinearTerms> Problem for SimulationError<'_, M> {
     fn n_params(&self) -> usize {
         self.model.n_params()
@@ -374,6 +401,14 @@ impl<M: NonlinearTerms> Problem for SimulationError<'_, M> {
 
     fn evaluate(&mut self, theta: &[f64], jacobian: bool) -> Result<Evaluation> {
         Ok(cost(self.model, theta, self.data, jacobian))
+    }
+
+    fn admissible(&mut self, theta: &[f64]) -> bool {
+        linear_admissible(self.model, theta)
+    }
+
+    fn bound_margin(&mut self, theta: &[f64]) -> Option<f64> {
+        linear_margin(self.model, theta)
     }
 
     /// The residuals the cost sums: every output of every sample after each record's

@@ -354,3 +354,35 @@ fn decoupled_known_model_reproduced_from_noise_free_data() {
         }
     }
 }
+
+#[test]
+fn a_stable_linear_part_is_kept_where_the_free_fit_leaves_it() {
+    // x(t+1) = 1.02 x + u, y = x: the free fit recovers the unstable pole; held stable, the
+    // fit ends inside the unit circle, below its start's cost
+    let free = Pnlss::new(1, 1, 1, Monomials::empty(2), Monomials::empty(2));
+    let held = free.clone().with_stable_linear();
+    let u = signal(60, 1, 5);
+    let (y, _) = free.simulate(&[1.02, 1.0, 1.0, 0.0], &u, None).unwrap();
+    let data = [PnlssData {
+        u: &u,
+        y: &y,
+        skip: 0,
+    }];
+    let start = [0.5, 1.0, 1.0, 0.0];
+    let opts = Options::default();
+    let f = estimate(&free, &data, &start, &opts, &mut |_| Flow::Continue).unwrap();
+    assert!((f.theta[0] - 1.02).abs() < 1e-6, "{:?}", f.theta);
+    let h = estimate(&held, &data, &start, &opts, &mut |_| Flow::Continue).unwrap();
+    assert!(h.theta[0].abs() < 1.0 && h.theta[0] > 0.9, "{:?}", h.theta);
+    assert!(h.cost <= free.cost(&start, &data, false).cost);
+    // the admissible set and its margin: the spectral radius of A less 1
+    let a = [0.5, 0.0, 0.0, 1.2];
+    let two = Pnlss::new(2, 1, 1, Monomials::empty(3), Monomials::empty(3));
+    let mut th = vec![0.0; two.n_params()];
+    th[..4].copy_from_slice(&a);
+    assert!(simulation::linear_admissible(&two, &th));
+    assert_eq!(simulation::linear_margin(&two, &th), None);
+    let two = two.with_stable_linear();
+    assert!(!simulation::linear_admissible(&two, &th));
+    assert!((simulation::linear_margin(&two, &th).unwrap() - 0.2).abs() < 1e-12);
+}
