@@ -37,7 +37,7 @@ type Range = Option<(Vec<f64>, Vec<f64>)>;
 
 /// A PNLSS structure, from a dict with `nx`, `nu`, `ny`, `zeta` and `eta` (the monomials
 /// as index lists into `z = [x; u]`) and optionally `range = (lo, hi)`, which clamps the
-/// monomials' arguments.
+/// monomials' arguments, and `stable`, whose fits keep the linear part's `A` stable.
 #[derive(FromPyObject)]
 #[pyo3(from_item_all)]
 pub struct PnlssStructure {
@@ -55,24 +55,21 @@ pub struct PnlssStructure {
 impl PnlssStructure {
     fn model(self) -> PyResult<Pnlss> {
         let (nx, nu) = (self.nx, self.nu);
-        let m = Pnlss::new(
+        let mut m = Pnlss::new(
             nx,
             nu,
             self.ny,
             Monomials::from_terms(nx, nu, self.zeta).py()?,
             Monomials::from_terms(nx, nu, self.eta).py()?,
         );
-        let m = if self.stable {
-            m.with_stable_linear()
-        } else {
-            m
-        };
+        m.stable_linear = self.stable;
         with_range(m, self.range, Pnlss::with_range)
     }
 }
 
 /// A decoupled PNLSS structure, from a dict with `dims = (nx, nu, ny)`, `branches`,
-/// `degrees` and optionally `range = (lo, hi)`, which clamps the branch arguments.
+/// `degrees` and optionally `range = (lo, hi)`, which clamps the branch arguments, and
+/// `stable` (as a PNLSS structure's).
 #[derive(FromPyObject)]
 #[pyo3(from_item_all)]
 pub struct DecoupledStructure {
@@ -88,12 +85,8 @@ pub struct DecoupledStructure {
 impl DecoupledStructure {
     fn model(self) -> PyResult<Decoupled> {
         let (nx, nu, ny) = self.dims;
-        let m = Decoupled::new(nx, nu, ny, self.branches, self.degrees).py()?;
-        let m = if self.stable {
-            m.with_stable_linear()
-        } else {
-            m
-        };
+        let mut m = Decoupled::new(nx, nu, ny, self.branches, self.degrees).py()?;
+        m.stable_linear = self.stable;
         with_range(m, self.range, Decoupled::with_range)
     }
 }

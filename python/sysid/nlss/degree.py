@@ -65,7 +65,8 @@ from ..data.iodata import IOData
 from ..errors import InsufficientDataError
 from ..validation.crossval import held_out_folds, insists
 
-__all__ = ["CANDIDATES", "PER_PARAMETER", "DegreeChoice", "choose_degree", "insists"]
+__all__ = ["CANDIDATES", "PER_PARAMETER", "DegreeChoice", "choose_degree", "insists",
+           "too_large"]
 
 #: the degrees ``degree="auto"`` tries (each an integer ``d``: all degrees ``2..d``)
 CANDIDATES = (2, 3)
@@ -108,6 +109,24 @@ class DegreeChoice:
                 "untried": dict(self.untried)}
 
 
+def too_large(data: IOData, size: Callable[[int], int]) -> dict[int, int]:
+    """``{degree: parameters}`` of the candidates above the smallest that the record cannot
+    judge: fewer than :data:`PER_PARAMETER` residuals (samples times outputs) per parameter
+    of their model (``size(degree)``).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.nlss.degree import too_large
+    >>> d = sysid.IOData(u=np.zeros((1000, 1)), y=np.zeros((1000, 1)))
+    >>> too_large(d, {2: 30, 3: 140}.get)
+    {3: 140}
+    """
+    residuals = sum(data.lengths) * data.n_outputs
+    sizes = {k: size(k) for k in CANDIDATES[1:]}
+    return {k: p for k, p in sizes.items() if p * PER_PARAMETER > residuals}
+
+
 def choose_degree(data: IOData, fit: Callable[[IOData, int, Any], Any],
                   linear: Callable[[IOData], Any] | None = None,
                   tick: Callable[[int, float], Any] | None = None,
@@ -127,9 +146,8 @@ def choose_degree(data: IOData, fit: Callable[[IOData, int, Any], Any],
     tick : callable, optional
         ``tick(count, fit)`` after each fold's fit (progress).
     size : callable, optional
-        ``size(degree)``: the parameters of that degree's model. A candidate above the
-        smallest is not fitted when the record gives fewer than :data:`PER_PARAMETER`
-        residuals per parameter (``DegreeChoice.untried``).
+        ``size(degree)``: the parameters of that degree's model. The candidates of
+        :func:`too_large` are not fitted (``DegreeChoice.untried``).
 
     Returns
     -------
@@ -156,8 +174,7 @@ def choose_degree(data: IOData, fit: Callable[[IOData, int, Any], Any],
             f"the record is too short to choose the degree on held-out blocks ({n} samples; "
             f"two blocks of {MIN_BLOCK} need {2 * MIN_BLOCK}): give degree= to fit one model")
     residuals = n * data.n_outputs
-    untried = {k: size(k) for k in CANDIDATES[1:] if size is not None
-               and size(k) * PER_PARAMETER > residuals}
+    untried = {} if size is None else too_large(data, size)
     tried = [k for k in CANDIDATES if k not in untried]
     cands: list[Any] = tried + (["linear"] if linear is not None else [])
 

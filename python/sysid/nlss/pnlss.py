@@ -458,7 +458,7 @@ def pnlss(
     finally:
         close()
     info["fit"] = _report(res, recs)
-    _said_held(res, max(r[0].shape[0] for r in recs))
+    _said_held(res)
     build = lambda th: cls(**kw_of(th), **common,  # noqa: E731
                            info={**info, "fit": dict(info["fit"])})
     if val_recs is not None:
@@ -575,12 +575,13 @@ def _auto_degree(data: IOData, n: int, kw: dict[str, Any], progress: Any) -> Any
     beside them; warns when those insist over the chosen degree on the held-out blocks
     (:func:`~sysid.validation.crossval.insists`; how often that was right:
     :mod:`sysid.nlss.degree`)."""
+    import functools
     import warnings
 
     from .._checks import user_stacklevel
     from ..validation.crossval import fold_count
     from .decoupled import n_parameters
-    from .degree import CANDIDATES, PER_PARAMETER, choose_degree, insists
+    from .degree import CANDIDATES, choose_degree, insists, too_large
 
     def linear(part: IOData) -> PNLSSModel:
         """The part's linear start (as ``pnlss`` fits it), a model without monomials."""
@@ -595,18 +596,16 @@ def _auto_degree(data: IOData, n: int, kw: dict[str, Any], progress: Any) -> Any
         init = kw["init"] if start is None else start.linear()
         return pnlss(part, n, degree=k, progress=False, **{**kw, "init": init})
 
-    def size(k: int) -> int:
+    @functools.cache
+    def size(k: int) -> int:  # the parameters of degree k's model, as its fit counts them
         m_, l_, degs = data.n_inputs, data.n_outputs, _degrees(k)
         if kw["branches"] is not None:
             return n_parameters(n, m_, l_, kw["branches"], len(degs))
-        ot = kw["terms"] if kw["output_terms"] is None else kw["output_terms"]
-        eta = 0 if ot == "none" else len(_monomials(n, m_, l_, ot, degs))
-        return ((n + l_) * (n + m_) + n * (1 + len(_monomials(n, m_, l_, kw["terms"], degs)))
-                + l_ * (1 + eta))
+        zeta, eta = _equation_terms(n, m_, l_, kw["terms"], kw["output_terms"], degs)
+        return (n + l_) * (n + m_) + n * len(zeta) + l_ * len(eta)
 
     # a bar over the fold fits (a progress callable follows the final fit's iterations)
-    total = fold_count(data) * (2 + sum(size(k) * PER_PARAMETER <= sum(data.lengths)
-                                        * data.n_outputs for k in CANDIDATES[1:]))
+    total = fold_count(data) * (len(CANDIDATES) + 1 - len(too_large(data, size)))
     cb, close = iteration_callback(False if callable(progress) else progress,
                                    "pnlss degree choice", total, _fold_line, unit="fit",
                                    postfix=lambda i, f, *a: {"held-out fit": f"{f:.1f} %"})
@@ -643,11 +642,7 @@ def _fit_coupled(lin: StateSpaceModel, us: list[np.ndarray], recs: list[Any], te
     fit_box = None if extrapolation == "polynomial" else envelope(linear_states(lin, us), us,
                                                                   0.5)
     rng = None if fit_box is None else (list(fit_box[0]), list(fit_box[1]))
-    # a constant term in each equation: the channel offsets removed by the scaling (and
-    # the mean of the nonlinear terms) enter the scaled equations as constants
-    zeta = [[]] + _monomials(n, m_, l_, terms, degs)
-    ot = terms if output_terms is None else output_terms
-    eta = [[]] + ([] if ot == "none" else _monomials(n, m_, l_, ot, degs))
+    zeta, eta = _equation_terms(n, m_, l_, terms, output_terms, degs)
     theta0 = np.concatenate([lin.A.ravel(), lin.B.ravel(), lin.C.ravel(), lin.D.ravel(),
                              np.zeros(n * len(zeta) + l_ * len(eta))])
     struct = {"nx": n, "nu": m_, "ny": l_, "zeta": zeta, "eta": eta, "range": rng}
@@ -680,6 +675,16 @@ def _fit_coupled(lin: StateSpaceModel, us: list[np.ndarray], recs: list[Any], te
                 "clamp": box}
 
     return kw_of, res
+
+
+def _equation_terms(n: int, m: int, l_: int, terms: str, output_terms: str | None,
+                    degs: list[int]) -> tuple[list[list[int]], list[list[int]]]:
+    """The state and output equations' terms ``zeta``, ``eta``: a constant (the channel
+    offsets removed by the scaling, and the mean of the nonlinear terms, enter the scaled
+    equations as constants), then the monomials of ``terms`` and ``output_terms``."""
+    ot = terms if output_terms is None else output_terms
+    return ([[]] + _monomials(n, m, l_, terms, degs),
+            [[]] + ([] if ot == "none" else _monomials(n, m, l_, ot, degs)))
 
 
 def _monomials(n: int, m: int, l_: int, terms: str, degs: list[int]) -> list[list[int]]:
@@ -725,7 +730,7 @@ def _report(res: dict[str, Any], recs: list[Any]) -> dict[str, Any]:
             **({"held_stable": res["held_stable"]} if "held_stable" in res else {})}
 
 
-def _said_held(res: dict[str, Any], samples: int) -> None:
+def _said_held(res: dict[str, Any]) -> None:
     """A :class:`StabilityWarning` when the search held the linear part stable
     (:func:`~sysid.nlss.common.held_stable`): the free search's pole, its growth over the
     record, both costs and the option that returns the free model."""
@@ -737,10 +742,9 @@ def _said_held(res: dict[str, Any], samples: int) -> None:
     if "held_stable" not in res:
         return
     h, cost = res["held_stable"], res["history"][-1]
-    growth = float(np.exp(min(samples * np.log(h["free_radius"]), 700.0)))
     warnings.warn(f"pnlss: the free search's linear part reached a pole of modulus "
                   f"{modulus(h['free_radius'])}, a mode that grows "
-                  f"{growth:.2g}-fold over the record, which the clamped "
+                  f"{h['free_growth']:.2g}-fold over the record, which the clamped "
                   f"monomials cannot hold once the state leaves the range they were fitted "
                   f"on; returned the search continued from iteration {h['from_iteration']} "
                   f"with the linear part held stable (cost {cost:.6g} against the free "
