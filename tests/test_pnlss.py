@@ -338,3 +338,22 @@ def test_significance_leaves_unsupported_directions_out_of_the_search():
         assert m.info["fit"]["cost"][-1] < 0.9 * m.info["fit"]["cost"][0]
     with pytest.raises(DataError):
         sysid.pnlss(d, 2, significance=-1, **kw)
+
+
+def test_a_cancelled_search_is_not_continued_held_stable():
+    """Ctrl-C (or a progress callable returning False) ends the fit: a free search cancelled
+    with an unstable linear part is returned as it stands, not continued held stable."""
+    import warnings
+
+    calls = []
+
+    def progress(*_):
+        calls.append(1)
+        return len(calls) < 3
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        m = sysid.pnlss(_bistable(), 1, degree=[3], terms="states", output_terms="none",
+                        progress=progress)
+    assert m.info["fit"]["stop"] == "cancelled" and "held_stable" not in m.info["fit"]
+    assert len(calls) == 3

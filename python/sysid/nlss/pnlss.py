@@ -657,7 +657,7 @@ def _fit_coupled(lin: StateSpaceModel, us: list[np.ndarray], recs: list[Any], te
 
     res = search(struct, theta0, max_iter)
     res["iterates"] = np.vstack([theta0[None, :], np.asarray(res["iterates"])])
-    if fit_box is not None:  # clamped monomials: an unstable A runs away outside the box
+    if fit_box is not None and res["stop"] != "cancelled":  # clamped: an unstable A runs away
         res = held_stable(res, n, lambda th0, it: search({**struct, "stable": True}, th0, it),
                           max_iter, max(r[0].shape[0] for r in recs))
 
