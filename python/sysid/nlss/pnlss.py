@@ -25,6 +25,7 @@ from .._display import modulus
 from .._progress import iteration_callback, iteration_printer
 from .._threads import one_blas_thread
 from ..data.iodata import IOData, require_record
+from ..data.levels import input_levels
 from ..errors import DataError, SysidWarning
 from ..models.protocol import ModelMixin
 from ..models.serialize import register_model
@@ -48,13 +49,13 @@ from .common import (
 )
 from .freqweight import averaged_periods, cost_weights, experiment_periods
 from .memory import check_memory
+from .monomials import TERMS, equation_terms, output_basis, warn_undetermined
 from .selection import ValidationRecords, select_iterate, validation_records
 from .startup import StartUp
 from .startup import failing as startup_failing
 
 __all__ = ["PNLSSModel", "pnlss"]
 
-_TERMS = ("full", "states", "inputs", "outputs")
 
 
 @register_model
@@ -343,6 +344,10 @@ def pnlss(
         in ``info["fit"]["returned"]``).
     IterationLimitWarning
         When the search stopped at ``max_iter``.
+    ExcitationWarning
+        When an input takes fewer levels than a monomial's power of it (a step test or a
+        binary PRBS: two): such monomials equal combinations of others on the record and are
+        left out (:mod:`sysid.nlss.monomials`; ``info["undetermined_monomials"]``).
 
     Raises
     ------
@@ -394,9 +399,9 @@ def pnlss(
     sd = scaled_data(data, sc)
     pers = experiment_periods(periods, len(sd.experiments))
     one = periods if pers is not None and np.ndim(periods) == 0 else None
-    if terms not in _TERMS or (output_terms is not None and output_terms not in _TERMS
+    if terms not in TERMS or (output_terms is not None and output_terms not in TERMS
                                  + ("none",)):
-        raise DataError(f"terms must be one of {', '.join(_TERMS)} and output_terms one of "
+        raise DataError(f"terms must be one of {', '.join(TERMS)} and output_terms one of "
                         f"those or 'none', got {terms!r} and {output_terms!r}")
     if extrapolation not in ("clamp", "polynomial"):
         raise DataError(f"extrapolation must be 'clamp' or 'polynomial', got {extrapolation!r}")
@@ -404,7 +409,7 @@ def pnlss(
         raise DataError(f"weighting must be 'none' or 'bla', got {weighting!r}")
     lin = linear_start(data, sd, sc, n, init, one)
     if "outputs" in (terms, output_terms):
-        lin = _output_basis(lin)
+        lin = output_basis(lin)
     lin = balanced(lin, [u for u, _ in sd.experiments])
     if np.max(np.abs(lin.poles())) >= 1:
         raise DataError("the linear start is unstable: its simulation cannot seed a "
@@ -458,6 +463,9 @@ def pnlss(
     finally:
         close()
     info["fit"] = _report(res, recs)
+    if "left_out" in res:
+        info["undetermined_monomials"] = lo = res["left_out"]
+        warn_undetermined(data.input_names, lo["levels"], degs, lo["monomials"], lo["kept"])
     _said_held(res)
     build = lambda th: cls(**kw_of(th), **common,  # noqa: E731
                            info={**info, "fit": dict(info["fit"])})
@@ -601,7 +609,8 @@ def _auto_degree(data: IOData, n: int, kw: dict[str, Any], progress: Any) -> Any
         m_, l_, degs = data.n_inputs, data.n_outputs, _degrees(k)
         if kw["branches"] is not None:
             return n_parameters(n, m_, l_, kw["branches"], len(degs))
-        zeta, eta = _equation_terms(n, m_, l_, kw["terms"], kw["output_terms"], degs)
+        zeta, eta, _ = equation_terms(n, m_, l_, kw["terms"], kw["output_terms"], degs,
+                                      input_levels([u for u, _ in data.experiments]))
         return (n + l_) * (n + m_) + n * len(zeta) + l_ * len(eta)
 
     # a bar over the fold fits (a progress callable follows the final fit's iterations)
@@ -642,7 +651,8 @@ def _fit_coupled(lin: StateSpaceModel, us: list[np.ndarray], recs: list[Any], te
     fit_box = None if extrapolation == "polynomial" else envelope(linear_states(lin, us), us,
                                                                   0.5)
     rng = None if fit_box is None else (list(fit_box[0]), list(fit_box[1]))
-    zeta, eta = _equation_terms(n, m_, l_, terms, output_terms, degs)
+    levels = input_levels(us)
+    zeta, eta, left_out = equation_terms(n, m_, l_, terms, output_terms, degs, levels)
     theta0 = np.concatenate([lin.A.ravel(), lin.B.ravel(), lin.C.ravel(), lin.D.ravel(),
                              np.zeros(n * len(zeta) + l_ * len(eta))])
     struct = {"nx": n, "nu": m_, "ny": l_, "zeta": zeta, "eta": eta, "range": rng}
@@ -660,6 +670,9 @@ def _fit_coupled(lin: StateSpaceModel, us: list[np.ndarray], recs: list[Any], te
     if fit_box is not None and res["stop"] != "cancelled":  # clamped: an unstable A runs away
         res = held_stable(res, n, lambda th0, it: search({**struct, "stable": True}, th0, it),
                           max_iter, max(r[0].shape[0] for r in recs))
+    if left_out:  # said by pnlss (an input of too few levels)
+        res["left_out"] = {"levels": levels.tolist(), "monomials": left_out,
+                           "kept": len(zeta) + len(eta) - 2}
 
     def kw_of(th: np.ndarray) -> dict[str, Any]:
         box = None
@@ -675,47 +688,6 @@ def _fit_coupled(lin: StateSpaceModel, us: list[np.ndarray], recs: list[Any], te
                 "clamp": box}
 
     return kw_of, res
-
-
-def _equation_terms(n: int, m: int, l_: int, terms: str, output_terms: str | None,
-                    degs: list[int]) -> tuple[list[list[int]], list[list[int]]]:
-    """The state and output equations' terms ``zeta``, ``eta``: a constant (the channel
-    offsets removed by the scaling, and the mean of the nonlinear terms, enter the scaled
-    equations as constants), then the monomials of ``terms`` and ``output_terms``."""
-    ot = terms if output_terms is None else output_terms
-    return ([[]] + _monomials(n, m, l_, terms, degs),
-            [[]] + ([] if ot == "none" else _monomials(n, m, l_, ot, degs)))
-
-
-def _monomials(n: int, m: int, l_: int, terms: str, degs: list[int]) -> list[list[int]]:
-    """The monomials (index lists into ``z = [x; u]``) of ``terms``; ``"outputs"``: those of
-    the first ``min(l_, n)`` states (the output-aligned ones, see :func:`_output_basis`) and
-    the inputs."""
-    if terms != "outputs":
-        return list(_sysid.pnlss_monomials(n, m, terms, degs))
-    k = min(l_, n)
-    return [[v if v < k else n + v - k for v in t]
-            for t in _sysid.pnlss_monomials(k, m, "full", degs)]
-
-
-def _output_basis(m: StateSpaceModel) -> StateSpaceModel:
-    """``m`` in the state basis whose first ``min(ny, n)`` states are the rows of ``C x``
-    (orthogonal complement for the rest), so that monomials of those states are monomials
-    of the linear part's outputs (less their direct term); ``m`` when ``C``'s rows are
-    dependent."""
-    n, l_ = m.nstates, m.noutputs
-    k = min(l_, n)
-    C = np.asarray(m.C, float)
-    u_, s, vt = np.linalg.svd(C)
-    r = int(np.sum(s > 1e-9 * max(s[0], 1e-300))) if s.size else 0
-    if r < k:
-        return m
-    # rows: k independent output directions, then the orthogonal complement of C's rows
-    Ti = np.vstack([C[:k] if k == l_ else (u_[:, :k].T @ C), vt[r:]])
-    if Ti.shape[0] != n:
-        return m
-    T = np.linalg.inv(Ti)
-    return StateSpaceModel(Ti @ m.A @ T, Ti @ m.B, C @ T, m.D, dt=m.dt)
 
 
 def _report(res: dict[str, Any], recs: list[Any]) -> dict[str, Any]:
