@@ -12,6 +12,7 @@ from scipy import signal
 
 import sysid
 from sysid._progress import Bar
+from sysid.identify.board import informative
 
 core = importlib.import_module("sysid.identify.core")
 
@@ -35,7 +36,7 @@ def _closed_loop_record(seed: int = 0, n: int = 3000, k: float = 0.25) -> sysid.
 
 def test_closed_loop_subspace_candidates_offer_no_stable_a_variant():
     data = _closed_loop_record()
-    parts, _ = core._informative(core.record_folds(data), data)
+    parts, _ = informative(core.record_folds(data), data)
     with warnings.catch_warnings(), Bar(None, "identify", enabled=False) as bar:
         warnings.simplefilter("ignore")
         board = core.Board(parts, bar, None)

@@ -45,8 +45,8 @@ from ..validation.ties import (  # the subspace automatic order's rule too
     wins_every_block,
 )
 
-__all__ = ["Board", "RESOLUTION", "slack", "tie", "bic", "free_poles", "held_out_score",
-           "noise_fitted", "unstable"]
+__all__ = ["Board", "informative", "RESOLUTION", "slack", "tie", "bic", "free_poles",
+           "held_out_score", "noise_fitted", "unstable"]
 
 def block_fit(fits: Any) -> float:
     """A block's fit: the mean over its outputs (those that move), ``-inf`` when none does."""
@@ -642,3 +642,33 @@ class Board:
             near = self.is_near(r, best, not allow_unstable)
             return (not ok, not near, r["order"] if near else 0, -r["held_out_fit"])
         return sorted(self.rows, key=key)
+
+
+def informative(parts: list[tuple[IOData, IOData]], data: IOData
+                 ) -> tuple[list[tuple[IOData, IOData]], int]:
+    """The folds whose held-out block has output variation to score against, and how many
+    were dropped. A block where every output stands still (a logger that ran on after the
+    test, a held or padded signal) has no fit: the fit divides by the block's variation, so
+    every candidate scored -inf there and the trimmed score lost its one atypical block to
+    it. Still blocks are
+    dropped, unless fewer than two would remain; they stay in the fitted parts.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.identify.board import informative
+    >>> from sysid.validation.crossval import folds
+    >>> u = np.random.default_rng(0).standard_normal(500)
+    >>> y = np.r_[np.convolve(u, [0.5, 0.3])[:400], np.zeros(100)]
+    >>> d = sysid.IOData(u=u, y=y)
+    >>> len(informative(folds(d, 5), d)[0])
+    4
+    """
+    y = np.vstack([e[1] for e in data.experiments])
+    scale = np.sqrt(np.mean((y - y.mean(0)) ** 2, axis=0))
+
+    def moves(held: IOData) -> bool:
+        return any(bool(np.any(np.ptp(e[1], axis=0) > 1e-9 * scale))
+                   for e in held.experiments if e[1].shape[0])
+    keep = [p for p in parts if moves(p[1])]
+    return (keep, len(parts) - len(keep)) if len(keep) >= 2 else (parts, 0)

@@ -10,17 +10,19 @@
    input is noted (``checks["periodic"]``): its held-out blocks repeat the fitted input.
 3. Candidates are scored on blocks of the estimation record held out from their fit: the
    record is cut into five contiguous blocks (fewer on short records; several experiments
-   laid end to end, cut where one ends: :func:`~sysid.validation.crossval.record_folds`),
-   each held out once while the rest fits the candidate, which then simulates
-   it (initial state fitted with the prior of where the block's input puts the state,
-   :mod:`sysid.validation.state_prior`); the score is the fit of the held-out blocks pooled (each
-   weighs its output variation), without the block where it fits worst and the one where it
-   fits best (:mod:`.board`); a block where every output stands still is left
-   out (:func:`_informative`); ``checks["held_out_evidence"]`` notes when one block holds
-   nearly all the output variation (fewer than two effective blocks). Candidates: every
-   subspace weighting (MOESP, N4SID, CVA) at every order the horizon allows (up to 20), with
-   and without feedthrough; the best of each of the smallest orders near the best refined by
-   prediction-error search on the simulation error
+   laid end to end, cut where one ends: :func:`~sysid.validation.crossval.record_folds`;
+   a chirp into interleaved pieces, ``checks["held_out_design"]``,
+   :mod:`sysid.validation.swept`), each held out once while the rest fits the candidate,
+   which then simulates it (initial state fitted with the prior of where the block's input
+   puts the state, :mod:`sysid.validation.state_prior`); the score is the fit of the
+   held-out blocks pooled (each weighs its output variation), without the block where it
+   fits worst and the one where it fits best (:mod:`.board`); a block where every output
+   stands still is left out (:func:`~sysid.identify.board.informative`);
+   ``checks["held_out_evidence"]`` notes when one block holds nearly all the output
+   variation (fewer than two effective blocks).
+   Candidates: every subspace weighting (MOESP, N4SID, CVA) at every order the horizon
+   allows (up to 20), with and without feedthrough; the best of each of the smallest
+   orders near the best refined by prediction-error search on the simulation error
    (every output's errors relative to its scale, as the fit % counts them: ``pem``'s
    ``weighting="output"``) and the best one on the prediction error; output-error models for
    one input and output; near-best candidates unstable on some block, at orders not refined
@@ -99,7 +101,8 @@ from ..validation.crossval import (
 )
 from ..validation.output_error import feedback_checked
 from ..validation.records import validation_record
-from .board import Board, free_poles, unstable
+from ..validation.swept import held_out_design
+from .board import Board, free_poles, informative, unstable
 from .choice import _choose
 from .climb import higher_orders
 from .integrating import integrating_candidates, integrating_note
@@ -158,36 +161,6 @@ def _offsets(data: IOData) -> tuple[IOData, np.ndarray, np.ndarray]:
     from ..data.offsets import remove_means
 
     return remove_means(data)
-
-
-def _informative(parts: list[tuple[IOData, IOData]], data: IOData
-                 ) -> tuple[list[tuple[IOData, IOData]], int]:
-    """The folds whose held-out block has output variation to score against, and how many
-    were dropped. A block where every output stands still (a logger that ran on after the
-    test, a held or padded signal) has no fit: the fit divides by the block's variation, so
-    every candidate scored -inf there and the trimmed score lost its one atypical block to
-    it. Still blocks are
-    dropped, unless fewer than two would remain; they stay in the fitted parts.
-
-    Examples
-    --------
-    >>> import numpy as np, sysid
-    >>> from sysid.identify.core import _informative
-    >>> from sysid.validation.crossval import folds
-    >>> u = np.random.default_rng(0).standard_normal(500)
-    >>> y = np.r_[np.convolve(u, [0.5, 0.3])[:400], np.zeros(100)]
-    >>> d = sysid.IOData(u=u, y=y)
-    >>> len(_informative(folds(d, 5), d)[0])
-    4
-    """
-    y = np.vstack([e[1] for e in data.experiments])
-    scale = np.sqrt(np.mean((y - y.mean(0)) ** 2, axis=0))
-
-    def moves(held: IOData) -> bool:
-        return any(bool(np.any(np.ptp(e[1], axis=0) > 1e-9 * scale))
-                   for e in held.experiments if e[1].shape[0])
-    keep = [p for p in parts if moves(p[1])]
-    return (keep, len(parts) - len(keep)) if len(keep) >= 2 else (parts, 0)
 
 
 def _checks(data: IOData) -> tuple[dict[str, Any], bool]:
@@ -638,7 +611,8 @@ def identify(
     # six significant digits: rounding to decimals printed data in micro-units as [0.0]
     checks["offsets"] = (f"input means [{', '.join(f'{v:.6g}' for v in mu)}], output means "
                          f"[{', '.join(f'{v:.6g}' for v in my)}] removed (kept with the model)")
-    parts, still = _informative(record_folds(centred), centred)
+    parts, still = informative(record_folds(centred), centred)
+    checks.update(held_out_design(centred, parts))  # a chirp's interleaved pieces
     h = _horizon(centred)
     short = [f"{k} ({n} samples)" for k, n in enumerate(centred.lengths) if n < 2 * h]
     if short:

@@ -5,7 +5,8 @@ dynamics, coloured noise, nonlinearity), so the largest gap of their logarithms 
 after the first one or two and picks order 1-2 where the data support more. What an engineer
 checks instead is how well a model of each order *simulates data it was not fitted on*. This
 module does that without touching the user's validation data: the estimation record is cut
-into five contiguous blocks (fewer on short records; or the experiments themselves), models
+into five contiguous blocks (fewer on short records; or the experiments themselves; a chirp
+into interleaved pieces, :mod:`.swept`), models
 of every order are fitted on the rest and simulated on the block left out (initial state
 fitted by least squares, with the prior of where the block's input puts the model's state:
 :mod:`.state_prior`), and the order whose median held-out simulation fit is best wins (the
@@ -51,6 +52,7 @@ import numpy as np
 from .. import _sysid
 from ..data.iodata import IOData
 from ..errors import DataError, InsufficientDataError, SysidError
+from .swept import PIECES, SHORTEST, interleaved_folds, swept
 from .ties import RESOLUTION, TOL, slack, tie, wins_every_block
 
 __all__ = ["OrderChoice", "cross_validated_order", "fold_count", "fold_horizon", "folds",
@@ -206,7 +208,10 @@ def record_folds(data: IOData) -> list[tuple[IOData, IOData]]:
     experiment's end moves onto it, so that no held-out piece is a sliver. Experiments
     shorter than ``MIN_BLOCK`` are never held out (their initial state would take most of
     their samples), and the fitted parts keep only pieces of at least ``MIN_BLOCK`` samples.
-    One experiment: :func:`folds` with :func:`fold_count`. Several: leaving one experiment
+    One experiment: :func:`folds` with :func:`fold_count`, or, when its input sweeps its
+    band (a chirp: each block holds a band the rest never excited,
+    :func:`sysid.validation.swept.swept`), as many folds of interleaved pieces
+    (:func:`~sysid.validation.swept.interleaved_folds`). Several: leaving one experiment
     out fitted every candidate on the other ones alone, so a short experiment next to a
     long one left a fold fitted on the short one, and every candidate was held to what it
     could support (order 1 from 30 samples next to 500).
@@ -221,7 +226,12 @@ def record_folds(data: IOData) -> list[tuple[IOData, IOData]]:
     """
     exps = data.experiments
     if len(exps) == 1:
-        return folds(data, fold_count(data))
+        pairs = folds(data, fold_count(data))
+        k = len(pairs)
+        # a swept input (a chirp): every contiguous block is a band the rest never excited
+        if data.lengths[0] // (k * PIECES) >= SHORTEST and swept(pairs):
+            return interleaved_folds(data, k)
+        return pairs
     kw = {"dt": data.dt, "input_names": data.input_names, "output_names": data.output_names}
     lengths = [u.shape[0] for u, _ in exps]
     holdable = [i for i, n in enumerate(lengths) if n >= MIN_BLOCK]
