@@ -18,11 +18,12 @@ its levels has as many levels as samples, and its powers are determined, if poor
 
 from __future__ import annotations
 
+import warnings
 from typing import Any
 
 import numpy as np
 
-__all__ = ["input_levels"]
+__all__ = ["input_levels", "warn_two_levels"]
 
 #: values closer than this, relative to the input's range, count as one level
 TOL = 1e-9
@@ -67,3 +68,36 @@ def input_levels(us: Any, cap: int = 8, tol: float = TOL) -> np.ndarray:
         gaps = np.count_nonzero(np.diff(v) > tol * span) if span > 0 else 0
         out[j] = min(int(gaps) + (1 if v.size else 0), cap)
     return out
+
+
+def warn_two_levels(us: Any, channels: list[int], names: list[str], who: str) -> None:
+    """An :class:`~sysid.ExcitationWarning` from ``who`` when an input of ``channels`` (those
+    given a static nonlinearity to fit) takes at most two levels over the records ``us``: a
+    curve through two points is any curve, so the data determine the nonlinearity there only,
+    and an affine map (the identity, its gain in the linear block) fits the record as well.
+
+    Examples
+    --------
+    >>> import warnings
+    >>> import numpy as np
+    >>> from sysid.data.levels import warn_two_levels
+    >>> u = np.repeat([[0.0], [1.0]], 50, axis=0)
+    >>> with warnings.catch_warnings(record=True) as w:
+    ...     warnings.simplefilter("always")
+    ...     warn_two_levels([u], [0], ["valve"], "nlhw")
+    >>> "valve takes 2 levels" in str(w[0].message)
+    True
+    """
+    from .._checks import user_stacklevel
+    from ..errors import ExcitationWarning
+
+    levels = input_levels(us, cap=3)
+    few = [f"{names[j]} takes {int(levels[j])} levels" for j in channels if levels[j] <= 2]
+    if few:
+        warnings.warn(f"{who}: in the estimation data input {' and input '.join(few)}, so "
+                      f"its input nonlinearity is determined at those values only: any curve "
+                      f"through them fits the record as well, and between and beyond them "
+                      f"its shape comes from its start, not the data (an affine map, the "
+                      f"identity with the linear block's gain, fits the same). Use "
+                      f"input_nl=None for it, or an excitation of more levels (a multisine, "
+                      f"random levels)", ExcitationWarning, stacklevel=user_stacklevel())

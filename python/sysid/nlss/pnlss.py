@@ -57,7 +57,6 @@ from .startup import failing as startup_failing
 __all__ = ["PNLSSModel", "pnlss"]
 
 
-
 @register_model
 class PNLSSModel(LinearPart, ModelMixin):
     """A polynomial nonlinear state-space model (see the module documentation).

@@ -30,6 +30,7 @@ from .._checks import (
 from .._progress import iteration_callback, iteration_printer
 from .._threads import one_blas_thread
 from ..data.iodata import require_record
+from ..data.levels import warn_two_levels
 from ..errors import DataError, StabilityWarning
 from ..polynomial.orders import matlab_orders
 from ..validation.output_error import feedback_checked
@@ -40,6 +41,7 @@ from .hw_model import (
     UserFunction,
     check_search_size,
     fit_amplitudes,
+    fitted_curve,
 )
 from .hw_uncertainty import attach
 from .operating_point import better_of_both, centred, record_means, undecided, use_offsets
@@ -180,6 +182,9 @@ def nlhw(
         raise DataError(f"nb must be a positive integer, got {nb!r}")
     max_iter, tol = as_int(max_iter, "max_iter", 0), as_nonnegative(tol, "tol")
     fin, fout = _check_nl(input_nl, "input_nl"), _check_nl(output_nl, "output_nl")
+    if fitted_curve(fin):  # a static curve fitted through two input levels is any curve
+        warn_two_levels([u for u, _ in exps], [0], list(getattr(data, "input_names", ["u0"])),
+                        "nlhw")
     check_search_size([fin, fout], sum(y.size for _, y in exps), "nlhw")
     if undecided(offsets, [fin, fout], exps):
         import copy

@@ -465,6 +465,20 @@ def nonlinearity_from_dict(d: dict[str, Any]) -> Nonlinearity:
     return nl
 
 
+def fitted_curve(f: Nonlinearity) -> bool:
+    """Whether ``f`` is a static curve the search fits (not the identity, not a fixed
+    :class:`UserFunction`).
+
+    Examples
+    --------
+    >>> import sysid
+    >>> from sysid.nonlinear.hw_model import Nonlinearity, fitted_curve
+    >>> fitted_curve(Nonlinearity()), fitted_curve(sysid.SigmoidNetwork(3))
+    (False, True)
+    """
+    return type(f) is not Nonlinearity and not isinstance(f, UserFunction)
+
+
 def check_search_size(nls: list[Any], residuals: int, who: str, regressors: int = 1) -> None:
     """Refuse, before the search allocates its Jacobian (one row per residual, one column
     per parameter), nonlinearities whose parameters make it too large: a

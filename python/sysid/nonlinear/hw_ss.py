@@ -27,10 +27,17 @@ from .._checks import (
 from .._progress import iteration_callback, iteration_printer
 from .._threads import one_blas_thread
 from ..data.iodata import require_record
+from ..data.levels import warn_two_levels
 from ..data.offsets import check_offsets
 from ..errors import DataError
 from .hw_initial import check_initial, free_response_ss, least_squares_states
-from .hw_model import Nonlinearity, UserFunction, check_search_size, fit_amplitudes
+from .hw_model import (
+    Nonlinearity,
+    UserFunction,
+    check_search_size,
+    fit_amplitudes,
+    fitted_curve,
+)
 from .hw_ss_model import HammersteinWienerSSModel
 from .hw_uncertainty import attach
 from .operating_point import better_of_both, centred, record_means, undecided, use_offsets
@@ -175,6 +182,9 @@ def nlhw_ss(
         raise DataError("a UserFunction can only be an input nonlinearity")
     check_search_size(fin + fout, sum(y.size for _, y in exps), "nlhw_ss")
     require_inputs_vary(exps, "nlhw_ss", getattr(data, "input_names", None))
+    # a static curve fitted through two input levels is any curve
+    warn_two_levels([u for u, _ in exps], [j for j, f in enumerate(fin) if fitted_curve(f)],
+                    list(getattr(data, "input_names", [f"u{j}" for j in range(m)])), "nlhw_ss")
     # before centring (a constant output is then 0) and the linear start (named otherwise)
     require_inputs_vary(exps, "nlhw_ss", getattr(data, "output_names", None), side=1)
     # before the Rust core, which takes max_iter unsigned (OverflowError on a negative)
