@@ -36,7 +36,7 @@ from typing import Any
 
 import numpy as np
 
-from ..data.excitation import _power
+from ..data.excitation import SEGMENT, _power
 from ..data.iodata import IOData
 
 __all__ = ["FLOOR", "PIECES", "SWEPT", "held_out_design", "interleaved_folds", "outside_share",
@@ -75,17 +75,24 @@ def outside_share(fit: IOData, held: IOData, segment: int) -> float:
     >>> round(outside_share(d(w[:3000]), d(w[3000:]), 512), 2)
     0.0
     """
-    def spectrum(data: IOData) -> np.ndarray | None:
-        parts = [_power(np.asarray(u, float), segment)[:segment // 2 + 1] * u.shape[0]
-                 for u, _ in data.experiments if u.shape[0] >= segment]
-        return sum(parts[1:], parts[0]) if parts else None
-
-    pf, ph = spectrum(fit), spectrum(held)
+    pf, ph = _spectrum(fit, segment), _spectrum(held, segment)
     if pf is None or ph is None:
         return 0.0
-    # a held-out input that stands still (a step test after its step) excites nothing: its
-    # rounding is no band of its own
-    moves = _spread(held) > STILL * _spread(fit)
+    return _share(pf, ph, _spread(held) > STILL * _spread(fit))
+
+
+def _spectrum(data: IOData, segment: int) -> np.ndarray | None:
+    """The inputs' one-sided windowed periodogram (segments of ``segment`` samples), the
+    experiments weighted by their length (those shorter than a segment left out)."""
+    parts = [_power(np.asarray(u, float), segment)[:segment // 2 + 1] * u.shape[0]
+             for u, _ in data.experiments if u.shape[0] >= segment]
+    return sum(parts[1:], parts[0]) if parts else None
+
+
+def _share(pf: np.ndarray, ph: np.ndarray, moves: np.ndarray) -> float:
+    """The largest share over the channels that ``moves`` (a held-out input that stands
+    still, a step test after its step, excites nothing: its power is rounding) of ``ph`` in
+    the bins where ``pf`` is below :data:`FLOOR` times its peak."""
     share = 0.0
     for j in range(pf.shape[1]):
         peak, total = float(pf[:, j].max()), float(ph[:, j].sum())
@@ -101,11 +108,12 @@ def _spread(data: IOData) -> np.ndarray:
 
 
 def swept(pairs: list[tuple[IOData, IOData]]) -> bool:
-    """Whether the median held-out block of ``pairs`` (fit, held-out) holds more than
+    """Whether the median held-out block of ``pairs`` (fit, held-out; the held-out blocks
+    partition the record, as :func:`sysid.validation.crossval.folds` cuts it) holds more than
     :data:`SWEPT` of its input power outside the band of the rest of the record
     (:func:`outside_share`, segments of the largest power of two within the shortest
-    held-out experiment; False when that is below :data:`SHORTEST` or there are fewer than
-    three blocks).
+    held-out experiment, at most :data:`sysid.data.excitation.SEGMENT`; False when that is
+    below :data:`SHORTEST` or there are fewer than three blocks).
 
     Examples
     --------
@@ -125,8 +133,21 @@ def swept(pairs: list[tuple[IOData, IOData]]) -> bool:
     shortest = min(min(h.lengths) for _, h in pairs)
     if shortest < SHORTEST:
         return False
-    segment = 1 << int(np.floor(np.log2(shortest)))
-    return bool(np.median([outside_share(f, h, segment) for f, h in pairs]) > SWEPT)
+    # at most the excitation check's longest segment: a long record's blocks are averaged
+    segment = min(1 << int(np.floor(np.log2(shortest))), SEGMENT)
+    # the held-out blocks partition the record: the rest of each is the sum of the others
+    # (one pass over the record, not one per block)
+    blocks = [_spectrum(h, segment) for _, h in pairs]
+    spread = [_spread(h) for _, h in pairs]
+    if any(b is None for b in blocks):
+        return False
+    shares = []
+    for i, ph in enumerate(blocks):
+        others = [j for j in range(len(blocks)) if j != i]
+        pf = sum(blocks[j] for j in others)
+        rest = np.max([spread[j] for j in others], axis=0)
+        shares.append(_share(pf, ph, spread[i] > STILL * rest))
+    return bool(np.median(shares) > SWEPT)
 
 
 def interleaved_folds(data: IOData, k: int, pieces: int = PIECES
