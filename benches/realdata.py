@@ -101,6 +101,11 @@ SHA-256, how each ``.npz`` is made and the findings: results/realdata_fresh10.md
 ``--fresh11-records DIR`` (``FRESH11``, results/realdata_fresh11_table[_<split>].md): the
 eleventh sweep's records (a 2-DOF helicopter's two rotors driven open loop); sources, SHA-256,
 how each ``.npz`` is made and the findings: results/realdata_fresh11.md.
+``--fresh12-records DIR`` (``FRESH12``, results/realdata_fresh12_table[_<split>].md): the
+twelfth sweep's records (a magnetic levitation rig under PID control, a friction damper driven
+by earthquake displacements, an electromagnetic actuator's chirp test), each validated on a
+second run; sources, SHA-256, how each ``.npz`` is made and the findings:
+results/realdata_fresh12.md.
 
 Score: the simulation fit on the validation part, NRMSE %, ``100 (1 - |y - yhat| / |y -
 mean(y)|)`` averaged over outputs, with the initial state fitted by least squares on the
@@ -150,6 +155,7 @@ from realdata_records import (  # noqa: F401
     FRESH9,
     FRESH10,
     FRESH11,
+    FRESH12,
     MORE,
     SWEEPS,
 )

@@ -145,6 +145,18 @@ FRESH11 = {
     "heli_yaw": ("heli_yaw", None),  # the same rig, a pulse on the yaw motor -> yaw, pitch
 }
 
+#: the twelfth sweep's records (``--fresh12-records DIR``), each validated on a second run of
+#: its rig (sources: results/realdata_fresh12.md)
+FRESH12 = {
+    "maglev_uaq": ("maglev_uaq", "maglev_uaq_val"),  # magnetic levitation under PID control,
+    # 10 ms: coil voltage -> ball position, coil current (random reference steps; a session of
+    # other steps validates)
+    "brfd_damper": ("brfd_damper", "brfd_damper_val"),  # banded rotary friction damper, 1/1024
+    # s: imposed displacement (an earthquake's) -> friction force (another earthquake validates)
+    "em_actuator": ("em_actuator", "em_actuator_val"),  # electromagnetic haptic actuator,
+    # 25 us: 0.5-1000 Hz chirp command -> coil current, vibrometer velocity (a repeat validates)
+}
+
 #: the sweeps read from ``DIR/<name>.npz``: ``--<sweep>-records DIR`` runs a table's records
 #: into ``results/<stem>[_<split>].md`` (the third sweep's tables beside its account,
 #: results/realdata_fresh3.md)
@@ -157,4 +169,5 @@ SWEEPS = {"more": ("MORE", "realdata_more"), "fresh": ("FRESH", "realdata_fresh"
           "fresh8": ("FRESH8", "realdata_fresh8_table"),
           "fresh9": ("FRESH9", "realdata_fresh9_table"),
           "fresh10": ("FRESH10", "realdata_fresh10_table"),
-          "fresh11": ("FRESH11", "realdata_fresh11_table")}
+          "fresh11": ("FRESH11", "realdata_fresh11_table"),
+          "fresh12": ("FRESH12", "realdata_fresh12_table")}
