@@ -31,7 +31,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["excited_lines", "spectral_excitation_order"]
+__all__ = ["excited_lines", "input_spectrum", "spectral_excitation_order"]
 
 #: Longest periodogram segment; longer records average segments of this length (Welch).
 SEGMENT = 1 << 16
@@ -80,6 +80,25 @@ def _power(x: np.ndarray, longest: int = SEGMENT) -> np.ndarray:
     for s in starts:
         out += np.abs(np.fft.fft(_centred(w, x[s:s + seg]), axis=0)) ** 2
     return out / len(starts)
+
+
+
+def input_spectrum(data: Any, segment: int) -> np.ndarray | None:
+    """One-sided windowed periodogram of a record's inputs (``(segment // 2 + 1, m)``,
+    segments of ``segment`` samples), its experiments weighted by their length; those
+    shorter than a segment are left out (``None`` when none is long enough).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.data.excitation import input_spectrum
+    >>> u = np.sin(2 * np.pi * 0.25 * np.arange(256))
+    >>> int(np.argmax(input_spectrum(sysid.IOData(u=u, y=u), 64)[:, 0]))  # bin 16 of 64
+    16
+    """
+    parts = [_power(np.asarray(u, float), segment)[:segment // 2 + 1] * u.shape[0]
+             for u, _ in data.experiments if u.shape[0] >= segment]
+    return sum(parts[1:], parts[0]) if parts else None
 
 
 _LOBES: dict[tuple[int, float], int] = {}

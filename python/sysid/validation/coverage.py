@@ -33,7 +33,7 @@ from typing import Any
 import numpy as np
 
 from .._checks import as_between, constant_channels
-from ..data.excitation import _power
+from ..data.excitation import input_spectrum
 from ..data.iodata import IOData, require_record
 from ..errors import DataError
 
@@ -157,11 +157,7 @@ def input_coverage(estimation: IOData | tuple[Any, Any], validation: IOData | tu
                         f"length ({shortest}), got {segment!r}")
     segment = int(segment)
 
-    def spectrum(data: IOData) -> np.ndarray:  # one-sided, experiments weighted by length
-        return sum(_power(np.asarray(u, float), segment)[:segment // 2 + 1] * u.shape[0]
-                   for u, _ in data.experiments if u.shape[0] >= segment)
-
-    pe, pv = spectrum(est), spectrum(val)
+    pe, pv = input_spectrum(est, segment), input_spectrum(val, segment)
     freqs = np.fft.rfftfreq(segment, est.dt if est.dt else 1.0)
     outside, bands = np.zeros(est.n_inputs), []
     # a validation input that stands still excites nothing: its rounding is no extrapolation

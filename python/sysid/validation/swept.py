@@ -36,7 +36,7 @@ from typing import Any
 
 import numpy as np
 
-from ..data.excitation import SEGMENT, _power
+from ..data.excitation import SEGMENT, input_spectrum
 from ..data.iodata import IOData
 
 __all__ = ["FLOOR", "PIECES", "SWEPT", "held_out_design", "interleaved_folds", "outside_share",
@@ -75,18 +75,10 @@ def outside_share(fit: IOData, held: IOData, segment: int) -> float:
     >>> round(outside_share(d(w[:3000]), d(w[3000:]), 512), 2)
     0.0
     """
-    pf, ph = _spectrum(fit, segment), _spectrum(held, segment)
+    pf, ph = input_spectrum(fit, segment), input_spectrum(held, segment)
     if pf is None or ph is None:
         return 0.0
     return _share(pf, ph, _spread(held) > STILL * _spread(fit))
-
-
-def _spectrum(data: IOData, segment: int) -> np.ndarray | None:
-    """The inputs' one-sided windowed periodogram (segments of ``segment`` samples), the
-    experiments weighted by their length (those shorter than a segment left out)."""
-    parts = [_power(np.asarray(u, float), segment)[:segment // 2 + 1] * u.shape[0]
-             for u, _ in data.experiments if u.shape[0] >= segment]
-    return sum(parts[1:], parts[0]) if parts else None
 
 
 def _share(pf: np.ndarray, ph: np.ndarray, moves: np.ndarray) -> float:
@@ -137,7 +129,7 @@ def swept(pairs: list[tuple[IOData, IOData]]) -> bool:
     segment = min(1 << int(np.floor(np.log2(shortest))), SEGMENT)
     # the held-out blocks partition the record: the rest of each is the sum of the others
     # (one pass over the record, not one per block)
-    blocks = [_spectrum(h, segment) for _, h in pairs]
+    blocks = [input_spectrum(h, segment) for _, h in pairs]
     spread = [_spread(h) for _, h in pairs]
     if any(b is None for b in blocks):
         return False
