@@ -729,4 +729,9 @@ def _block_eigen(P: np.ndarray, blocks: list[int]) -> tuple[np.ndarray, np.ndarr
         k = keep[o:o + b]
         V[o:o + b, c:c + int(k.sum())] = pv[:, k]
         o, c = o + b, c + int(k.sum())
+    # each eigenvector's sign is LAPACK's choice, which differs between builds: fixed (its
+    # largest entry positive) so that a seed's Monte Carlo draws are the same on every
+    # machine (a test's draw that overflowed on one machine did not on another)
+    if V.size:
+        V *= np.where(V[np.argmax(np.abs(V), axis=0), np.arange(V.shape[1])] < 0, -1.0, 1.0)
     return w[keep], V
