@@ -18,6 +18,8 @@ def _dryer():
 
 @pytest.mark.parametrize("fit", [
     lambda d: sysid.nlhw(d, 2, 2, 1, input_nl=sysid.SigmoidNetwork(3), output_nl=None),
+    # a saturation on the dryer is fitted both about its means and not: said once
+    lambda d: sysid.nlhw(d, 2, 2, 1, input_nl=sysid.Saturation(), output_nl=None),
     lambda d: sysid.nlhw_ss(d, 2, input_nl=sysid.SigmoidNetwork(3), output_nl=None),
 ])
 def test_an_input_curve_fitted_through_two_levels_is_said(fit):

@@ -82,7 +82,6 @@ def _power(x: np.ndarray, longest: int = SEGMENT) -> np.ndarray:
     return out / len(starts)
 
 
-
 def input_spectrum(data: Any, segment: int) -> np.ndarray | None:
     """One-sided windowed periodogram of a record's inputs (``(segment // 2 + 1, m)``,
     segments of ``segment`` samples), its experiments weighted by their length; those

@@ -91,6 +91,8 @@ def warn_two_levels(us: Any, channels: list[int], names: list[str], who: str) ->
     from .._checks import user_stacklevel
     from ..errors import ExcitationWarning
 
+    if not channels:
+        return
     levels = input_levels(us, cap=3)
     few = [f"{names[j]} takes {int(levels[j])} levels" for j in channels if levels[j] <= 2]
     if few:

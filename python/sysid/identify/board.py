@@ -645,13 +645,13 @@ class Board:
 
 
 def informative(parts: list[tuple[IOData, IOData]], data: IOData
-                 ) -> tuple[list[tuple[IOData, IOData]], int]:
+                ) -> tuple[list[tuple[IOData, IOData]], int]:
     """The folds whose held-out block has output variation to score against, and how many
     were dropped. A block where every output stands still (a logger that ran on after the
     test, a held or padded signal) has no fit: the fit divides by the block's variation, so
     every candidate scored -inf there and the trimmed score lost its one atypical block to
-    it. Still blocks are
-    dropped, unless fewer than two would remain; they stay in the fitted parts.
+    it. Still blocks are dropped, unless fewer than two would remain; they stay in the
+    fitted parts.
 
     Examples
     --------

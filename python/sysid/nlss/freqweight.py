@@ -83,7 +83,7 @@ def _smooth(s2: np.ndarray) -> np.ndarray:
 
 
 def cost_weights(weighting: str, sd: IOData, pers: list[int] | None, recs: list[Any],
-             averaged: bool) -> Any:
+                 averaged: bool) -> Any:
     """The lines and weights of the frequency-weighted cost, or ``None`` (time domain)."""
     if weighting == "none":
         return None

@@ -182,9 +182,6 @@ def nlhw(
         raise DataError(f"nb must be a positive integer, got {nb!r}")
     max_iter, tol = as_int(max_iter, "max_iter", 0), as_nonnegative(tol, "tol")
     fin, fout = _check_nl(input_nl, "input_nl"), _check_nl(output_nl, "output_nl")
-    if fitted_curve(fin):  # a static curve fitted through two input levels is any curve
-        warn_two_levels([u for u, _ in exps], [0], list(getattr(data, "input_names", ["u0"])),
-                        "nlhw")
     check_search_size([fin, fout], sum(y.size for _, y in exps), "nlhw")
     if undecided(offsets, [fin, fout], exps):
         import copy
@@ -193,6 +190,9 @@ def nlhw(
             data, nb, nf, nk, input_nl=copy.deepcopy(input_nl),
             output_nl=copy.deepcopy(output_nl), max_iter=max_iter, tol=tol, progress=progress,
             offsets=o, initial_condition=ic))
+    # a static curve fitted through two input levels is any curve
+    warn_two_levels([u for u, _ in exps], [0] if fitted_curve(fin) else [],
+                    list(getattr(data, "input_names", ["u0"])), "nlhw")
     shift = use_offsets(offsets, [fin, fout], exps)
     raw = exps  # the record in its own units: the covariance's simulation errors
     u0, y0 = record_means(exps) if shift else (np.zeros(1), np.zeros(1))

@@ -182,9 +182,6 @@ def nlhw_ss(
         raise DataError("a UserFunction can only be an input nonlinearity")
     check_search_size(fin + fout, sum(y.size for _, y in exps), "nlhw_ss")
     require_inputs_vary(exps, "nlhw_ss", getattr(data, "input_names", None))
-    # a static curve fitted through two input levels is any curve
-    warn_two_levels([u for u, _ in exps], [j for j, f in enumerate(fin) if fitted_curve(f)],
-                    list(getattr(data, "input_names", [f"u{j}" for j in range(m)])), "nlhw_ss")
     # before centring (a constant output is then 0) and the linear start (named otherwise)
     require_inputs_vary(exps, "nlhw_ss", getattr(data, "output_names", None), side=1)
     # before the Rust core, which takes max_iter unsigned (OverflowError on a negative)
@@ -196,6 +193,9 @@ def nlhw_ss(
             data, order, input_nl=copy.deepcopy(input_nl), output_nl=copy.deepcopy(output_nl),
             feedthrough=feedthrough, max_iter=max_iter, tol=tol, progress=progress,
             linear=linear, offsets=o, initial_condition=ic))
+    # a static curve fitted through two input levels is any curve
+    warn_two_levels([u for u, _ in exps], [j for j, f in enumerate(fin) if fitted_curve(f)],
+                    list(getattr(data, "input_names", [f"u{j}" for j in range(m)])), "nlhw_ss")
     shift = use_offsets(offsets, fin + fout, exps)
     raw = exps  # the record in its own units: the covariance's simulation errors
     u0, y0 = record_means(exps) if shift else (np.zeros(m), np.zeros(p))

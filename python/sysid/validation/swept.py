@@ -102,10 +102,11 @@ def _spread(data: IOData) -> np.ndarray:
 def swept(pairs: list[tuple[IOData, IOData]]) -> bool:
     """Whether the median held-out block of ``pairs`` (fit, held-out; the held-out blocks
     partition the record, as :func:`sysid.validation.crossval.folds` cuts it) holds more than
-    :data:`SWEPT` of its input power outside the band of the rest of the record
-    (:func:`outside_share`, segments of the largest power of two within the shortest
-    held-out experiment, at most :data:`sysid.data.excitation.SEGMENT`; False when that is
-    below :data:`SHORTEST` or there are fewer than three blocks).
+    :data:`SWEPT` of its input power outside the band of the rest of the record (as
+    :func:`outside_share`, the rest's spectrum the sum of the other blocks': one pass over
+    the record; segments of the largest power of two within the shortest held-out
+    experiment, at most :data:`sysid.data.excitation.SEGMENT`; False when that is below
+    :data:`SHORTEST` or there are fewer than three blocks).
 
     Examples
     --------
