@@ -88,6 +88,18 @@ def test_resampling_a_one_sample_experiment_is_refused_not_nan():
         sysid.resample(sysid.IOData(U[:1], Y[:1], 0.1), 0.2)
 
 
+@pytest.mark.parametrize("fit", [
+    lambda d: sysid.n4sid(d, 2), lambda d: sysid.ssest(d, 2), lambda d: sysid.arx(d, 2, 2, 1),
+    lambda d: sysid.oe(d, 2, 2, 1), lambda d: sysid.nlhw(d, 2, 2, 1),
+    lambda d: sysid.pnlss(d, 2, degree=2, progress=False)])
+def test_a_one_sample_record_is_too_short_not_constant(fit):
+    """On one sample every channel is "constant": n4sid said "output y0 is constant", arx
+    "input u0 is 0.12573 in every sample", pnlss "input u0 is constant": the length is the
+    problem, and the error says so."""
+    with pytest.raises(InsufficientDataError, match="too few samples: .*one sample"):
+        fit(sysid.IOData(U[:1], Y[:1], 0.1))
+
+
 def test_what_was_refused_still_works_when_given_right():
     s = sysid.Saturation(-1.0, 1.0)
     s.params = s.initial(None)

@@ -391,6 +391,10 @@ def test_identify_says_a_record_is_too_short_before_checking_its_channels():
     y = np.convolve(u, [0.0, 1.0, 0.5])[:200] + 0.01 * rng.standard_normal(200)
     with pytest.raises(sysid.InsufficientDataError, match=r"\(39 samples; two held-out"):
         sysid.identify(sysid.IOData(u=u[:39], y=y[:39]))
+    # 5 random samples change "at samples 1, 2, 3, 4 only": identify called them a step test
+    # that "no process model fitted stably" (NumericalError)
+    with pytest.raises(sysid.InsufficientDataError, match=r"\(5 samples; two held-out"):
+        sysid.identify(sysid.IOData(u=u[:5], y=y[:5]))
     with pytest.raises(sysid.InsufficientDataError, match=r"validation record is too short "
                        r"\(1 sample"):
         sysid.identify(sysid.IOData(u=u, y=y), validation=sysid.IOData(u=u[:1], y=y[:1]))

@@ -585,6 +585,10 @@ def require_inputs_vary(exps: list[tuple[np.ndarray, np.ndarray]], who: str,
     sysid.errors.DataError: input u0 is 0 in every sample: bj cannot estimate ...
     """
     kind = ("input", "output")[side]
+    if exps and max(len(e[side]) for e in exps) < 2:  # one sample: every channel "constant"
+        raise errors.InsufficientDataError(
+            f"too few samples: {who} needs a record whose channels can vary, and each "
+            f"experiment has one sample; give a longer record")
     flat = constant_channels([e[side] for e in exps], "all")
     for j in np.flatnonzero(flat):
         first = next(e[side][0, j] for e in exps if len(e[side]))

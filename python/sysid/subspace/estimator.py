@@ -58,6 +58,7 @@ from ..errors import (
     DataError,
     ExcitationError,
     FeedbackWarning,
+    InsufficientDataError,
     OrderError,
     RiccatiError,
     SysidError,
@@ -109,6 +110,10 @@ def _check_signals(data: IOData) -> None:
     """Refuse constant outputs and inputs (naming the channel, as the polynomial estimators
     do); warn (OffsetWarning) about offsets much larger than the variation. Channels out of
     double precision's range are refused first (their variance underflows to 0)."""
+    if max(data.lengths) < 2:  # else the one sample would be called "constant" below
+        raise InsufficientDataError(
+            "too few samples: each experiment has one sample; the subspace methods need a "
+            "record whose channels vary (a longer record)")
     stats = record_stats(data)  # one pass over the record for the three checks
     check_magnitudes(data, "the subspace methods", stats)
     if 1 in stats:
