@@ -106,6 +106,10 @@ twelfth sweep's records (a magnetic levitation rig under PID control, a friction
 by earthquake displacements, an electromagnetic actuator's chirp test), each validated on a
 second run; sources, SHA-256, how each ``.npz`` is made and the findings:
 results/realdata_fresh12.md.
+``--fresh13-records DIR`` (``FRESH13``, results/realdata_fresh13_table[_<split>].md): the
+thirteenth sweep's records (a rotary inverted pendulum under a PD loop, a piezo steering
+mirror's periodic multisine, a loudspeaker-driven chopper's sine), each validated on a second
+run; sources, SHA-256, how each ``.npz`` is made and the findings: results/realdata_fresh13.md.
 
 Score: the simulation fit on the validation part, NRMSE %, ``100 (1 - |y - yhat| / |y -
 mean(y)|)`` averaged over outputs, with the initial state fitted by least squares on the
@@ -156,6 +160,7 @@ from realdata_records import (  # noqa: F401
     FRESH10,
     FRESH11,
     FRESH12,
+    FRESH13,
     MORE,
     SWEEPS,
 )

@@ -157,6 +157,16 @@ FRESH12 = {
     # 25 us: 0.5-1000 Hz chirp command -> coil current, vibrometer velocity (a repeat validates)
 }
 
+FRESH13 = {
+    "qube_furuta": ("qube_furuta", "qube_furuta_val"),  # rotary inverted pendulum balanced
+    # upright by a PD loop, 2 ms: the two references and a feedforward voltage -> arm and
+    # pendulum angles (another run's seed validates)
+    "fsm_piezo": ("fsm_piezo", "fsm_piezo_val"),  # piezo fine steering mirror, 3 x 3, 1/6400 s:
+    # two periods of a random-phase multisine -> three displacements (another realisation)
+    "voicecoil_chopper": ("voicecoil_chopper", "voicecoil_chopper_val"),  # loudspeaker driving
+    # an optical chopper, 1 ms: a 1 Hz sine -> LVDT position (a run at another amplitude)
+}
+
 #: the sweeps read from ``DIR/<name>.npz``: ``--<sweep>-records DIR`` runs a table's records
 #: into ``results/<stem>[_<split>].md`` (the third sweep's tables beside its account,
 #: results/realdata_fresh3.md)
@@ -170,4 +180,5 @@ SWEEPS = {"more": ("MORE", "realdata_more"), "fresh": ("FRESH", "realdata_fresh"
           "fresh9": ("FRESH9", "realdata_fresh9_table"),
           "fresh10": ("FRESH10", "realdata_fresh10_table"),
           "fresh11": ("FRESH11", "realdata_fresh11_table"),
-          "fresh12": ("FRESH12", "realdata_fresh12_table")}
+          "fresh12": ("FRESH12", "realdata_fresh12_table"),
+          "fresh13": ("FRESH13", "realdata_fresh13_table")}

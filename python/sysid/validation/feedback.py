@@ -18,10 +18,13 @@ inputs in the outputs then "predict" it further: with the outputs as regressors,
 multisine record of a few thousand samples was declared fed back (p < 1e-14). The ARX
 innovations are free of the inputs' past; the input depends on them only through a
 controller. A noise-free loop is not flagged: its innovations vanish (and without noise the
-open-loop methods are not biased either). Not solved: a *nonlinear* system driven by a
-periodic input still looks fed back, because the nonlinear distortions in its outputs are
-functions of the input's past that a linear ARX model leaves in the innovations (the F-16
-record with the shaker voltage as input: p = 1e-37 on 8192 samples, 1e-89 before).
+open-loop methods are not biased either). A *nonlinear* system looks fed back: the
+nonlinear distortions in its outputs are functions of the input's past that a linear ARX
+model leaves in the innovations (the F-16 record with the shaker voltage as input: p = 1e-37
+on 8192 samples, 1e-89 before). Where the input is periodic (two whole periods or more) the
+test runs on what changes from one period to the next (:func:`non_periodic_parts`): the
+distortions, periodic as the input, cancel there, and a loop still feeds the output's noise
+into the input.
 """
 
 from __future__ import annotations
@@ -38,7 +41,7 @@ from ..data.iodata import IOData, require_record
 from ..errors import DataError, InsufficientDataError
 
 __all__ = ["FEEDBACK_WARNING_LEVEL", "FeedbackTest", "check_feedback", "default_lags",
-           "feedback_pvalues", "feedback_statistics"]
+           "feedback_pvalues", "feedback_statistics", "non_periodic_parts"]
 
 #: combined p-value below which the estimators that feedback biases warn of it
 #: (:class:`sysid.FeedbackWarning`: the open-loop subspace methods, the output-error fits of
@@ -205,6 +208,9 @@ class FeedbackTest(HTMLResult):
                           else np.asarray(explained, float))
         self.explained_new = (np.zeros(len(p_values)) if explained_new is None
                               else np.asarray(explained_new, float))
+        #: ``(period, periods)`` when the input is periodic and the test ran on what changes
+        #: from period to period (:func:`non_periodic_parts`), else ``None``
+        self.periodic: tuple[int, int] | None = None
 
     @property
     def explained_share(self) -> float:
@@ -253,6 +259,9 @@ class FeedbackTest(HTMLResult):
             lines.append(f"{name:<12}{F:>12.4g}{p:>14.3g}{100 * e:>14.3g}")
         lines.append("explained: the share of the input's variance the past output innovations "
                      "explain beyond its own past")
+        if self.periodic is not None:
+            lines.append(f"periodic input ({self.periodic[0]} samples, {self.periodic[1]} "
+                         f"periods): tested on what changes from one period to the next")
         lines.append(repr(self))
         if self.detected:
             lines.append("open-loop subspace methods are biased here: use sysid.pbsid or "
@@ -303,8 +312,12 @@ def check_feedback(data: IOData | tuple[Any, Any], lags: int | None = None, *, a
 
     Regresses each ``u_i(t)`` on ``lags`` past inputs and on the innovations of the past
     outputs (see the module notes) and tests, with an F test, whether the innovations improve
-    the prediction (means removed per experiment first). Periodic and band-limited inputs
-    (multisines) are tested correctly: only the noise in the outputs can reveal a loop.
+    the prediction (means removed per experiment first). Band-limited inputs (multisines)
+    are tested correctly: only the noise in the outputs can reveal a loop. A periodic input
+    (two whole periods or more) is tested on what changes from one period to the next
+    (:func:`non_periodic_parts`; :attr:`FeedbackTest.periodic` says so): a loop feeds the
+    output's noise back there, while the excitation and a nonlinear plant's distortions,
+    periodic as the input, cancel.
 
     Parameters
     ----------
@@ -345,10 +358,69 @@ def check_feedback(data: IOData | tuple[Any, Any], lags: int | None = None, *, a
         raise InsufficientDataError(f"lags = {lags} needs experiments of at least "
                                     f"{2 * lags + 2} samples; use fewer lags")
     exps = [(u - u.mean(axis=0), y - y.mean(axis=0)) for u, y in data.experiments]
+    periodic = non_periodic_parts(data, lags)
+    if periodic is not None:  # the test on what changes from period to period
+        exps, period, periods, scale = periodic
     factor = _sysid.compress(exps, lags, 1, None, "qr")
     F, p, shares, q, df2, news = feedback_statistics(factor)
     if factor.n_columns <= lags * (data.n_inputs + data.n_outputs):
         raise InsufficientDataError(f"lags = {lags} leaves no degrees of freedom; use a "
                                     "longer record or fewer lags")
-    return FeedbackTest(F, p, lags, (q, df2), float(alpha), list(data.input_names), shares,
+    if periodic is not None:  # shares of the whole input's variance, as on any record
+        shares = shares * scale
+    test = FeedbackTest(F, p, lags, (q, df2), float(alpha), list(data.input_names), shares,
                         news)
+    if periodic is not None:
+        test.periodic = (period, periods)
+    return test
+
+
+def non_periodic_parts(data: IOData, lags: int) -> tuple[list[Any], int, int, np.ndarray
+                                                       ] | None:
+    """The record's non-periodic parts, when its input is periodic (:func:`sysid.
+    detect_period`, at least two whole periods in every experiment, each period at least
+    ``2 lags + 2`` samples): ``(experiments, period, periods, scale)``, else ``None``.
+
+    Under feedback ``u = r - F y`` from a periodic reference ``r``, what the input does
+    differently from one period to the next is ``-F`` applied to what the output does
+    differently: the output's noise. In open loop it is the input's own noise, independent
+    of the output's. Everything periodic cancels there: the excitation itself, the plant's
+    transient-free response and a nonlinear plant's distortions, which a linear ARX model
+    leaves in the output innovations and which then "predict" a deterministic input on the
+    whole record (a piezo mirror's open-loop multisine: p < 1e-300, past outputs explaining
+    21 % of the input's variance). The ``K`` whole periods of each experiment give ``K - 1``
+    orthonormal contrasts (Helmert's: period ``j + 1`` against the mean of the ``j`` before
+    it, times ``sqrt(j / (j + 1))``), each an experiment of one period; the periodic mean is
+    the one combination left out. ``scale`` per input: the contrasts' share of the input's
+    variance (about its mean), by which the explained shares are rescaled to the whole
+    input's.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.validation.feedback import non_periodic_parts
+    >>> rng = np.random.default_rng(0)
+    >>> u = np.tile(rng.standard_normal(200), 3) + 0.01 * rng.standard_normal(600)
+    >>> exps, period, periods, scale = non_periodic_parts(sysid.IOData(u=u, y=u), 10)
+    >>> len(exps), period, periods, bool(scale[0] < 1e-3)
+    (2, 200, 3, True)
+    """
+    from ..data.periodicity import detect
+
+    found, _ = detect(data)
+    if found is None or found.periods < 2 or found.period < 2 * lags + 2:
+        return None
+    per, k = found.period, found.periods
+    out, np_energy, total = [], 0.0, 0.0
+    for u, y in data.experiments:
+        u, y = u[:per * k], y[:per * k]
+        total = total + np.sum((u - u.mean(axis=0)) ** 2, axis=0)
+        us, ys = u.reshape(k, per, -1), y.reshape(k, per, -1)
+        for j in range(1, k):
+            w = np.sqrt(j / (j + 1.0))
+            cu = w * (us[:j].mean(axis=0) - us[j])
+            cy = w * (ys[:j].mean(axis=0) - ys[j])
+            np_energy = np_energy + np.sum(cu ** 2, axis=0)
+            out.append((cu - cu.mean(axis=0), cy - cy.mean(axis=0)))
+    scale = np.where(total > 0, np_energy / np.where(total > 0, total, 1.0), 0.0)
+    return out, per, k, scale
