@@ -317,8 +317,9 @@ class Board:
         elif budgeted and not self.time_left():
             row["note"] = "time budget spent while it was fitted: not chosen"
             row["worse_than_start"] = True
-        elif start is not None and row["held_out_fit"] < start["held_out_fit"] - tie(
-                start["held_out_fit"]):
+        elif (start is not None and not start.get("start_only")
+              and row["held_out_fit"] < start["held_out_fit"] - tie(start["held_out_fit"])):
+            # (a start that is not a candidate is no alternative: the board's best is)
             row["note"] = (f"held-out fit below its start's ({start['held_out_fit']:.1f} %): "
                            "not chosen")
             row["worse_than_start"] = True
@@ -329,7 +330,8 @@ class Board:
 
     def _below_start(self, fits: list[float], outs: list[np.ndarray], start: dict[str, Any]
                      ) -> bool:
-        """A refinement below its start, or below the best stable candidate scored so far
+        """A refinement below its start (one that is itself a candidate: a stabilised
+        subspace fit is only a start), or below the best stable candidate scored so far
         (by more than :func:`tie`), on most of the held-out blocks (blocks holding more
         than half of their output variation, as the score weighs them: most of them when
         they vary alike), whatever it does on the blocks not yet scored: no typical stretch
@@ -340,7 +342,8 @@ class Board:
         are mostly these)."""
         best = self.best() if len(fits) < len(self.folds) else None  # (once all are scored,
         # the held-out score decides whether it is near the best)
-        for ref_row in (start, best) if best is not None and best is not start else (start,):
+        refs = [r for r in (start, best) if r is not None and not r.get("start_only")]
+        for ref_row in (refs if best is not start else refs[:1]):
             ref = ref_row.get("fold_fits") or []
             if len(ref) != len(self.folds):
                 continue
