@@ -94,6 +94,7 @@ from ..validation.crossval import (
     MIN_BLOCK,
     TOL,
     fold_horizon,
+    grown_order,
     parts_too_short,
     record_folds,
     require_held_out_length,
@@ -271,21 +272,29 @@ def _subspace_candidates(board: Board, full: IOData, methods: tuple[str, ...],
 
     def refit(data: IOData, m: str, n: int, ft: bool, stable: bool = False) -> Any:
         return estimator(data).fit(n, method=m, feedthrough=ft, stable=stable)
-    board.subspace = (ests, estimator, top)  # for the state-sequence candidates
 
-    for meth in methods:
-        for ft in (False, True):
-            for n in range(1, top + 1):
-                row = board.add(meth, n, ft, None, "subspace",
-                                lambda k, m=meth, n=n, ft=ft: ests[k].fit(
-                                    n, method=m, feedthrough=ft, kalman=False),
-                                lambda data, m=meth, n=n, ft=ft: refit(data, m, n, ft),
-                                budgeted=False)
-                if row is not None and meth not in CLOSED_LOOP:  # its stable-A variant
-                    row["stabilised"] = (  # (none for ssarx, pbsid: their fit refuses it)
-                        lambda k, m=meth, n=n, ft=ft: ests[k].fit(
-                            n, method=m, feedthrough=ft, kalman=False, stable=True),
-                        lambda data, m=meth, n=n, ft=ft: refit(data, m, n, ft, True))
+    def add_orders(low: int, high: int) -> None:
+        for meth in methods:
+            for ft in (False, True):
+                for n in range(low, high + 1):
+                    row = board.add(meth, n, ft, None, "subspace",
+                                    lambda k, m=meth, n=n, ft=ft: ests[k].fit(
+                                        n, method=m, feedthrough=ft, kalman=False),
+                                    lambda data, m=meth, n=n, ft=ft: refit(data, m, n, ft),
+                                    budgeted=False)
+                    if row is not None and meth not in CLOSED_LOOP:  # its stable-A variant
+                        row["stabilised"] = (  # (none for ssarx, pbsid: their fit refuses it)
+                            lambda k, m=meth, n=n, ft=ft: ests[k].fit(
+                                n, method=m, feedthrough=ft, kalman=False, stable=True),
+                            lambda data, m=meth, n=n, ft=ft: refit(data, m, n, ft, True))
+
+    add_orders(1, top)
+    # the best order at the top of the grid: the grid grows while the window allows
+    ceiling = top if max_order is not None else min(e.max_order for e in ests)
+    while top < ceiling and (best := board.best()) is not None and best["order"] == top:
+        low, top = top + 1, grown_order(top, ceiling)
+        add_orders(low, top)
+    board.subspace = (ests, estimator, top)  # for the state-sequence candidates
 
 
 def implied_fit(cost: float, data: IOData, weighting: str | None) -> float:

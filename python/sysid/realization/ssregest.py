@@ -196,7 +196,8 @@ def _median(table: dict[int, list[float]]) -> dict[int, float]:
 
 def _choose(whole: dict[int, StateSpaceModel], table: dict[int, list[float]], data: Any
             ) -> tuple[int, dict[str, Any]]:
-    from ..validation.crossval import choose, simulation_fit, stable_first
+    from ..validation.crossval import choose, simulation_fit
+    from ..validation.stable_orders import stable_first
 
     med = _median(table)
     unstable = {n for n, m in whole.items() if not m.is_stable()}

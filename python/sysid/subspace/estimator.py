@@ -532,7 +532,7 @@ class SubspaceEstimator:
         predict it one step ahead with their Kalman predictor), the smallest within 0.5 fit
         points of the best, among the orders whose model on the whole record is stable unless
         an unstable one beats the best stable order on every block
-        (:func:`sysid.validation.crossval.stable_first`). Otherwise (an estimator built from
+        (:func:`sysid.validation.stable_orders.stable_first`). Otherwise (an estimator built from
         a factor, a record too short to split): the largest gap of the log singular values
         (:attr:`auto_order`). The result is recorded in
         ``model.info["order_selection"]``. ``orders``: only these are tried (default: every

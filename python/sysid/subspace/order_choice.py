@@ -2,7 +2,7 @@
 cross-validated inside the record (:mod:`sysid.validation.crossval`; for a time series, which
 has no simulation, one-step prediction fit), among the orders whose model on the whole record
 is stable unless the data insist on an unstable one
-(:func:`sysid.validation.crossval.stable_first`); the singular-value gap where the record
+(:func:`sysid.validation.stable_orders.stable_first`); the singular-value gap where the record
 cannot be split or the estimator holds no data (built from a factor).
 (``feedthrough="auto"``, which ``order="auto"`` uses unless ``feedthrough``
 is given: :mod:`sysid.subspace.feedthrough`.)"""

@@ -1,6 +1,6 @@
 """When held-out fits are ties: the rule by which :func:`sysid.identify`'s board and the
 subspace automatic order (:func:`sysid.validation.crossval.choose`,
-:func:`~sysid.validation.crossval.stable_first`) compare candidates scored on blocks of the
+:func:`~sysid.validation.stable_orders.stable_first`) compare candidates scored on blocks of the
 record held out from their fit.
 
 Two fits are ties when they differ by less than :func:`tie` of the better one: ``TOL``
@@ -69,7 +69,7 @@ def wins_every_block(fits: Any, ref: Any, score: float, ref_score: float) -> boo
     """``fits`` (per held-out block) better than ``ref`` on every block, and its ``score``
     above ``ref_score`` by more than :func:`tie`: the sign test (at ``2**-K``) by which
     the data insist on an unstable model against the best stable one
-    (:func:`sysid.validation.crossval.stable_first`,
+    (:func:`sysid.validation.stable_orders.stable_first`,
     :meth:`sysid.identify.board.Board.insisting`)."""
     return (len(fits) == len(ref) and all(a > b for a, b in zip(fits, ref))
             and score > ref_score + tie(score))
