@@ -110,6 +110,10 @@ results/realdata_fresh12.md.
 thirteenth sweep's records (a rotary inverted pendulum under a PD loop, a piezo steering
 mirror's periodic multisine, a loudspeaker-driven chopper's sine), each validated on a second
 run; sources, SHA-256, how each ``.npz`` is made and the findings: results/realdata_fresh13.md.
+``--fresh14-records DIR`` (``FRESH14``, results/realdata_fresh14_table[_<split>].md): the
+fourteenth sweep's records (a flexible-link robot under a lead compensator, validated on a
+second sweep; a ventilator on a test lung under PI pressure control, split); sources, SHA-256,
+how each ``.npz`` is made and the findings: results/realdata_fresh14.md.
 
 Score: the simulation fit on the validation part, NRMSE %, ``100 (1 - |y - yhat| / |y -
 mean(y)|)`` averaged over outputs, with the initial state fitted by least squares on the
@@ -161,6 +165,7 @@ from realdata_records import (  # noqa: F401
     FRESH11,
     FRESH12,
     FRESH13,
+    FRESH14,
     MORE,
     SWEEPS,
 )

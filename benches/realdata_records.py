@@ -167,6 +167,13 @@ FRESH13 = {
     # an optical chopper, 1 ms: a 1 Hz sine -> LVDT position (a run at another amplitude)
 }
 
+FRESH14 = {
+    "slfr": ("slfr", "slfr_val"),  # single-link flexible robot under a lead compensator, 2 ms:
+    # the motor command sent -> motor encoder, tip accelerometer (a second sweep validates)
+    "vent": ("vent", None),  # ventilator on a test lung under PI pressure control, 10 ms:
+    # inhale valve command -> patient pressure, two flow-sensor pressures
+}
+
 #: the sweeps read from ``DIR/<name>.npz``: ``--<sweep>-records DIR`` runs a table's records
 #: into ``results/<stem>[_<split>].md`` (the third sweep's tables beside its account,
 #: results/realdata_fresh3.md)
@@ -181,4 +188,5 @@ SWEEPS = {"more": ("MORE", "realdata_more"), "fresh": ("FRESH", "realdata_fresh"
           "fresh10": ("FRESH10", "realdata_fresh10_table"),
           "fresh11": ("FRESH11", "realdata_fresh11_table"),
           "fresh12": ("FRESH12", "realdata_fresh12_table"),
-          "fresh13": ("FRESH13", "realdata_fresh13_table")}
+          "fresh13": ("FRESH13", "realdata_fresh13_table"),
+          "fresh14": ("FRESH14", "realdata_fresh14_table")}
