@@ -609,7 +609,8 @@ def cross_validated_order(
     feedthrough : bool
         Estimate ``D`` in the fits.
     orders : list of int, optional
-        Orders to try (default ``1 .. min(max_order, 20)``).
+        Orders to try (default ``1 .. min(max_order, 20)``, grown by :func:`grown_order`
+        while the best is the top).
     tol : float
         Fit points a smaller order may give up and still win.
     whole : SubspaceEstimator, optional
