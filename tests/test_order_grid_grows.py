@@ -76,7 +76,6 @@ def test_identify_grows_the_methods_still_rising_at_the_top():
     grows (a 2 x 28 flexible structure, 90-93 % held out from order 26 on: identify
     validated at 68.6 % with the grid at 20, 95.2 % with it grown)."""
     from sysid.identify.board import Board
-    from sysid.identify.core import _rising
 
     board = Board.__new__(Board)
 
@@ -87,5 +86,5 @@ def test_identify_grows_the_methods_still_rising_at_the_top():
                   + [row("moesp", False, n, 40.0 - abs(n - 16)) for n in range(1, 21)]
                   + [row("cva", True, 20, np.nan), dict(row("moesp", True, 20, 99.0),
                                                         stable=False)])
-    assert _rising(board, 20) == {("cva", True)}
-    assert _rising(board, 30) == set()
+    assert board.rising(20) == {("cva", True)}
+    assert board.rising(30) == set()

@@ -441,6 +441,19 @@ class Board:
                 and not r.get("start_only")
                 and (r["stable"] or not (stable_only or r.get("not_insisted"))))
 
+    def rising(self, top: int) -> set[tuple[str, bool]]:
+        """The subspace methods (with their feedthrough choice) whose best stable candidate
+        on the held-out blocks has the grid's top order ``top``: their fit still rises there
+        (a 2 x 28 flexible structure: CVA with ``D`` best at order 20 of 1-20, 32 %, and
+        90-93 % from order 26 on, while the best of all was order 16)."""
+        best: dict[tuple[str, bool], dict[str, Any]] = {}
+        for r in self.rows:
+            key = (r["family"], r["feedthrough"])
+            if r["criterion"] == "subspace" and self.eligible(r) and (
+                    key not in best or r["held_out_fit"] > best[key]["held_out_fit"]):
+                best[key] = r
+        return {key for key, r in best.items() if r["order"] == top}
+
     def best_fit(self, stable_only: bool = True) -> float:
         best = self.best(stable_only)
         return best["held_out_fit"] if best is not None else -np.inf

@@ -100,6 +100,7 @@ from ..validation.crossval import (
     record_folds,
     require_held_out_length,
     simulation_fit,
+    tie,
 )
 from ..validation.output_error import feedback_checked
 from ..validation.records import validation_record
@@ -290,26 +291,18 @@ def _subspace_candidates(board: Board, full: IOData, methods: tuple[str, ...],
                             lambda data, m=meth, n=n, ft=ft: refit(data, m, n, ft, True))
 
     add_orders(1, top, {(m, ft) for m in methods for ft in (False, True)})
-    # a method's best order at the top of the grid: its grid grows while the window allows
-    ceiling = top if max_order is not None else min(e.max_order for e in ests)
-    while top < ceiling and (rising := _rising(board, top)):
+    # a method's best order at the top of the grid: its grid grows while the window allows,
+    # kept only where a larger order beats the grid's best by more than a tie (else a
+    # near-tie moves the near-best set that the refinements start from)
+    ceiling, first, grid_best = (top if max_order is not None else min(
+        e.max_order for e in ests)), top, board.best_fit()
+    while top < ceiling and (rising := board.rising(top)):
         low, top = top + 1, grown_order(top, ceiling)
         add_orders(low, top, rising)
+    if top > first and board.best_fit() <= grid_best + tie(grid_best):
+        board.rows = [r for r in board.rows if r["order"] <= first]
+        top = first
     board.subspace = (ests, estimator, top)  # for the state-sequence candidates
-
-
-def _rising(board: Board, top: int) -> set[tuple[str, bool]]:
-    """The subspace methods (with their feedthrough choice) whose best stable candidate on
-    the held-out blocks has the grid's top order ``top``: their fit still rises there (a
-    2 x 28 flexible structure: CVA with ``D`` best at order 20 of 1-20, 32 %, and 90-93 %
-    from order 26 on, while the best of all was order 16)."""
-    best: dict[tuple[str, bool], dict[str, Any]] = {}
-    for r in board.rows:
-        key = (r["family"], r["feedthrough"])
-        if r["criterion"] == "subspace" and board.eligible(r) and (
-                key not in best or r["held_out_fit"] > best[key]["held_out_fit"]):
-            best[key] = r
-    return {key for key, r in best.items() if r["order"] == top}
 
 
 def implied_fit(cost: float, data: IOData, weighting: str | None) -> float:
