@@ -11,6 +11,7 @@ import numpy as np
 from ..data.iodata import IOData
 from ..errors import DataError
 from .board import Board, bic, unstable
+from .notes import integrates_within
 
 #: candidates the held-out blocks cannot tell apart that are re-fitted and compared by BIC
 N_FINAL = 12
@@ -42,7 +43,15 @@ def _choose(board: Board, ranked: list[dict[str, Any]], data: IOData, stable_onl
                 continue
             fitted.append((r["bic"], r, m))
     if fitted:
-        _, r, m = min(fitted, key=lambda t: t[0])
+        # a re-fit with a mode that acts as an integrator over the record, held inside the
+        # unit circle by nothing the data say (often the search's stability bound), follows
+        # the record's drift; among candidates the blocks cannot tell apart, one whose long-
+        # term behaviour the data determine is preferred when there is one
+        determined = [t for t in fitted if not integrates_within(t[2], data)]
+        _, r, m = min(determined or fitted, key=lambda t: t[0])
+        if determined and len(determined) < len(fitted):
+            r["note"] = r["note"] or ("chosen by BIC over near-best re-fits whose mode acts as "
+                                      "an integrator over the record")
         return m, r
     for r in ranked:
         if not board.eligible(r, stable_only) or "bic" in r:

@@ -16,9 +16,9 @@ from ..data.iodata import IOData
 from ..models.continuous import ContinuousStateSpace
 from ..validation.crossval import trend_share
 
-__all__ = ["excitation_check", "trend_check", "persistent_mode_check", "weak_check",
-           "refit_cap_check", "loop_checks", "loop_feedthrough_check", "loop_bias_check",
-           "TREND_SHARE", "TREND_OUTPUT", "PERSISTENT_DECAY", "WEAK_FIT"]
+__all__ = ["excitation_check", "trend_check", "integrates_within", "persistent_mode_check",
+           "weak_check", "refit_cap_check", "loop_checks", "loop_feedthrough_check",
+           "loop_bias_check", "TREND_SHARE", "TREND_OUTPUT", "PERSISTENT_DECAY", "WEAK_FIT"]
 
 #: a held-out fit below this (in %) explains less than half of the outputs' variation
 #: (``fit = 100 (1 - sqrt(1 - explained))``): ``checks["weak"]`` says so
@@ -87,6 +87,44 @@ def trend_check(model: Any, data: IOData, checks: dict[str, Any]) -> None:
         f"(sysid.detrend(data, 'linear')) and identify again")
 
 
+def integrates_within(model: Any, data: IOData) -> bool:
+    """Whether a pole of the stable discrete-time ``model`` keeps more than
+    ``PERSISTENT_DECAY`` of its mode over the longest experiment of ``data`` while turning
+    less than once there: within the record it acts as an integrator, and how far inside
+    the unit circle it sits is not determined by the data (:func:`persistent_mode_check`).
+    An integrator made explicit (``info["integrating"]``) is not such a pole.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.identify.notes import integrates_within
+    >>> d = sysid.IOData(u=np.ones(1000), y=np.arange(1000.0))
+    >>> [integrates_within(sysid.StateSpaceModel([[p]], [[1.0]], [[1.0]]), d)
+    ...  for p in (1 - 1e-8, 0.9)]
+    [True, False]
+    """
+    poles = _discrete_poles(model)
+    if poles is None or not 0.0 < float(np.max(np.abs(poles))) < 1.0:
+        return False
+    n = max(data.lengths)
+    kept = np.array([mode_kept(float(abs(z)), n) for z in poles])
+    turns = np.abs(np.angle(poles)) * n / (2 * np.pi)
+    return bool(np.any((kept > PERSISTENT_DECAY) & (turns < 1.0)))
+
+
+def _discrete_poles(model: Any) -> np.ndarray | None:
+    """The poles of a discrete-time model, or None (continuous time, an explicit
+    integrator, no poles, or none to be had)."""
+    if isinstance(model, ContinuousStateSpace) or not hasattr(model, "poles") or (
+            (getattr(model, "info", None) or {}).get("integrating")):
+        return None
+    try:
+        poles = np.asarray(model.poles())
+    except Exception:  # noqa: BLE001 - a model without poles has no mode to note
+        return None
+    return poles if poles.size else None
+
+
 def persistent_mode_check(model: Any, data: IOData, checks: dict[str, Any]) -> None:
     """``checks["persistent_mode"]`` when a pole of the chosen (stable) discrete-time model
     decays by less than ``1 - PERSISTENT_DECAY`` over the longest experiment. How far inside
@@ -114,14 +152,8 @@ def persistent_mode_check(model: Any, data: IOData, checks: dict[str, Any]) -> N
     >>> "undamped oscillation of period 20.9 samples" in checks["persistent_mode"]
     True
     """
-    if isinstance(model, ContinuousStateSpace) or not hasattr(model, "poles") or (
-            (getattr(model, "info", None) or {}).get("integrating")):
-        return  # an integrator made explicit is said by checks["integrating"]
-    try:
-        poles = np.asarray(model.poles())
-    except Exception:  # noqa: BLE001 - a model without poles has no mode to note
-        return
-    if poles.size == 0:
+    poles = _discrete_poles(model)  # (an integrator made explicit: checks["integrating"])
+    if poles is None:
         return
     rho = float(np.max(np.abs(poles)))
     n = max(data.lengths)
