@@ -114,6 +114,10 @@ run; sources, SHA-256, how each ``.npz`` is made and the findings: results/reald
 fourteenth sweep's records (a flexible-link robot under a lead compensator, validated on a
 second sweep; a ventilator on a test lung under PI pressure control, split); sources, SHA-256,
 how each ``.npz`` is made and the findings: results/realdata_fresh14.md.
+``--fresh15-records DIR`` (``FRESH15``, results/realdata_fresh15_table[_<split>].md): the
+fifteenth sweep's records (a shake table's one-storey model, a twin rotor's pitch, a gasoline
+engine's emissions), each validated on a second run; sources, SHA-256, how each ``.npz`` is
+made and the findings: results/realdata_fresh15.md.
 
 Score: the simulation fit on the validation part, NRMSE %, ``100 (1 - |y - yhat| / |y -
 mean(y)|)`` averaged over outputs, with the initial state fitted by least squares on the
@@ -166,6 +170,7 @@ from realdata_records import (  # noqa: F401
     FRESH12,
     FRESH13,
     FRESH14,
+    FRESH15,
     MORE,
     SWEEPS,
 )

@@ -174,6 +174,15 @@ FRESH14 = {
     # inhale valve command -> patient pressure, two flow-sensor pressures
 }
 
+FRESH15 = {
+    "shake1": ("shake1", "shake1_val"),  # a one-storey model on a small shake table, 120 Hz:
+    # table acceleration (El Centro) -> top-floor acceleration (a second trial validates)
+    "trms_pitch": ("trms_pitch", "trms_pitch_val"),  # a home-built twin rotor's pitch, 0.1 s:
+    # a random binary offset on the main rotor's command -> pitch angle (another run)
+    "engine": ("engine", "engine_val"),  # a gasoline engine on a test bench, 10 Hz: speed,
+    # load, lambda, ignition angle -> particles, HC, NOx, two temperatures (the test run)
+}
+
 #: the sweeps read from ``DIR/<name>.npz``: ``--<sweep>-records DIR`` runs a table's records
 #: into ``results/<stem>[_<split>].md`` (the third sweep's tables beside its account,
 #: results/realdata_fresh3.md)
@@ -189,4 +198,5 @@ SWEEPS = {"more": ("MORE", "realdata_more"), "fresh": ("FRESH", "realdata_fresh"
           "fresh11": ("FRESH11", "realdata_fresh11_table"),
           "fresh12": ("FRESH12", "realdata_fresh12_table"),
           "fresh13": ("FRESH13", "realdata_fresh13_table"),
-          "fresh14": ("FRESH14", "realdata_fresh14_table")}
+          "fresh14": ("FRESH14", "realdata_fresh14_table"),
+          "fresh15": ("FRESH15", "realdata_fresh15_table")}
