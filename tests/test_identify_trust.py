@@ -30,6 +30,16 @@ def _two_scales(seed: int = 0):
     return sysid.IOData(u=u[:1000], y=y[:1000]), sysid.IOData(u=u[1000:], y=y[1000:])
 
 
+def _board_and_models(shrink: float):
+    """An empty board on five blocks of :func:`_two_scales`, a good third-order model and
+    two with its ``A`` shrunk: by 0.3 (poor) and by ``shrink``."""
+    est, _ = _two_scales()
+    board = Board(sysid.validation.crossval.folds(est, 5), _Bar())
+    good = sysid.moesp(est, order=3)
+    poor = sysid.StateSpaceModel(good.A * 0.3, good.B, good.C, good.D)
+    return board, good, poor, sysid.StateSpaceModel(good.A * shrink, good.B, good.C, good.D)
+
+
 def test_pem_output_weighting_counts_every_output_whatever_its_units():
     est, val = _two_scales()
     # order 2 for a third-order plant: the fit must trade one output against the other
@@ -128,12 +138,7 @@ def test_a_refinement_is_not_stopped_by_a_cut_that_moves():
 def test_a_refinement_below_the_best_candidate_on_most_blocks_is_stopped_early():
     """Not below its own (poor) start, but below the best candidate scored so far on most
     blocks: it cannot catch up, so the remaining blocks are not fitted."""
-    est, _ = _two_scales()
-    parts = sysid.validation.crossval.folds(est, 5)
-    board = Board(parts, _Bar())
-    good = sysid.moesp(est, order=3)
-    poor = sysid.StateSpaceModel(good.A * 0.3, good.B, good.C, good.D)
-    mid = sysid.StateSpaceModel(good.A * 0.6, good.B, good.C, good.D)
+    board, good, poor, mid = _board_and_models(0.6)
     start = board.add("moesp", 3, False, None, "subspace", lambda k: poor, None,
                       budgeted=False)
     board.add("moesp", 3, False, None, "subspace", lambda k: good, None, budgeted=False)
@@ -498,12 +503,7 @@ def test_a_refinement_below_a_start_that_is_only_a_start_stays_a_candidate():
     stable ``A`` at order 14 scored 43.4 % held out, its start 47.0 %, the model returned
     20.4 %; validation 34.5 % -> 48.2 % once the refinement stays). Against its start it
     is not judged; against the board's best it still is."""
-    est, _ = _two_scales()
-    parts = sysid.validation.crossval.folds(est, 5)
-    board = Board(parts, _Bar())
-    good = sysid.moesp(est, order=3)
-    poor = sysid.StateSpaceModel(good.A * 0.3, good.B, good.C, good.D)
-    mid = sysid.StateSpaceModel(good.A * 0.9, good.B, good.C, good.D)
+    board, good, poor, mid = _board_and_models(0.9)
     board.add("cva", 3, False, None, "subspace", lambda k: poor, None, budgeted=False)
     start = board.add("moesp", 3, False, None, "subspace, stable A", lambda k: good, None,
                       budgeted=False)
