@@ -544,8 +544,7 @@ def constant_channels(arrays: list[np.ndarray], about: str = "each") -> np.ndarr
     channel is constant (:data:`CONSTANT_TOL`): about each experiment's own level
     (``"each"``: no variation within any experiment, hence no spectrum) or about one level
     in every experiment (``"all"``: a channel at other levels in other experiments still
-    moves what it drives). The one check of both, used by the estimators
-    (:func:`require_inputs_vary`) and the spectral estimates.
+    moves what it drives); used by the estimators and the spectral estimates.
 
     Examples
     --------
@@ -561,8 +560,7 @@ def constant_channels(arrays: list[np.ndarray], about: str = "each") -> np.ndarr
     mag = np.max([np.max(np.abs(a), axis=0) for a in parts], axis=0)
     scaled = [a / np.where(mag > 0, mag, 1.0) for a in parts]  # no overflow, no underflow
     if about == "all":
-        spread = np.max([a.max(axis=0) for a in scaled], axis=0) - np.min(
-            [a.min(axis=0) for a in scaled], axis=0)
+        spread = np.max([a.max(0) for a in scaled], 0) - np.min([a.min(0) for a in scaled], 0)
     else:
         spread = np.max([np.ptp(a, axis=0) for a in scaled], axis=0)
     return spread <= CONSTANT_TOL
@@ -570,10 +568,9 @@ def constant_channels(arrays: list[np.ndarray], about: str = "each") -> np.ndarr
 
 def require_inputs_vary(exps: list[tuple[np.ndarray, np.ndarray]], who: str,
                         names: Any = None, side: int = 0, error: type = DataError) -> None:
-    """Refuse a record in which an input (``side=1``: an output) is zero or constant in
-    every experiment, at one level (:func:`constant_channels`): the dynamics ``who``
-    estimates would not be determined by the data. ``error``: the exception raised (a
-    :class:`DataError` subclass).
+    """Refuse a record in which an input (``side=1``: an output) is constant in every
+    experiment, at one level (:func:`constant_channels`): the dynamics ``who`` estimates
+    would not be determined by the data; ``error``: the :class:`DataError` raised.
 
     Examples
     --------
@@ -586,9 +583,8 @@ def require_inputs_vary(exps: list[tuple[np.ndarray, np.ndarray]], who: str,
     """
     kind = ("input", "output")[side]
     if exps and max(len(e[side]) for e in exps) < 2:  # one sample: every channel "constant"
-        raise errors.InsufficientDataError(
-            f"too few samples: {who} needs a record whose channels can vary, and each "
-            f"experiment has one sample; give a longer record")
+        raise errors.InsufficientDataError(f"too few samples: each experiment has one sample; "
+                                           f"{who} needs a longer record")
     flat = constant_channels([e[side] for e in exps], "all")
     for j in np.flatnonzero(flat):
         first = next(e[side][0, j] for e in exps if len(e[side]))

@@ -107,13 +107,11 @@ def _preprocessing(data: IOData, from_factor: bool) -> dict[str, Any]:
 
 
 def _check_signals(data: IOData) -> None:
-    """Refuse constant outputs and inputs (naming the channel, as the polynomial estimators
-    do); warn (OffsetWarning) about offsets much larger than the variation. Channels out of
-    double precision's range are refused first (their variance underflows to 0)."""
+    """Refuse constant outputs and inputs (naming the channel); warn (OffsetWarning) about
+    offsets; channels out of double precision's range first (their variance underflows)."""
     if max(data.lengths) < 2:  # else the one sample would be called "constant" below
-        raise InsufficientDataError(
-            "too few samples: each experiment has one sample; the subspace methods need a "
-            "record whose channels vary (a longer record)")
+        raise InsufficientDataError("too few samples: each experiment has one sample; the "
+                                    "subspace methods need a longer record")
     stats = record_stats(data)  # one pass over the record for the three checks
     check_magnitudes(data, "the subspace methods", stats)
     if 1 in stats:
@@ -122,8 +120,7 @@ def _check_signals(data: IOData) -> None:
             if std[j] == 0:
                 raise DataError(
                     f"output {n} is constant ({mean[j]:g}): there is nothing to identify; "
-                    "check the channel (a stuck sensor, the wrong column?) or drop it"
-                )
+                    "check the channel (a stuck sensor, the wrong column?) or drop it")
     if data.input_names:  # else the horizon's rank test would refuse it without a name
         require_inputs_vary(data.experiments, "the subspace methods", data.input_names,
                             error=ExcitationError)
