@@ -118,6 +118,9 @@ how each ``.npz`` is made and the findings: results/realdata_fresh14.md.
 fifteenth sweep's records (a shake table's one-storey model, a twin rotor's pitch, a gasoline
 engine's emissions), each validated on a second run; sources, SHA-256, how each ``.npz`` is
 made and the findings: results/realdata_fresh15.md.
+``--fresh16-records DIR`` (``FRESH16``, results/realdata_fresh16_table[_<split>].md): the
+sixteenth sweep's record (an elbow driven by two pneumatic muscles, validated on a second
+run); source, SHA-256, how the ``.npz`` is made and the findings: results/realdata_fresh16.md.
 
 Score: the simulation fit on the validation part, NRMSE %, ``100 (1 - |y - yhat| / |y -
 mean(y)|)`` averaged over outputs, with the initial state fitted by least squares on the
@@ -171,6 +174,7 @@ from realdata_records import (  # noqa: F401
     FRESH13,
     FRESH14,
     FRESH15,
+    FRESH16,
     MORE,
     SWEEPS,
 )

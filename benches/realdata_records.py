@@ -183,6 +183,11 @@ FRESH15 = {
     # load, lambda, ignition angle -> particles, HC, NOx, two temperatures (the test run)
 }
 
+FRESH16 = {
+    "pneumatic_arm": ("pneumatic_arm", "pneumatic_arm_val"),  # an elbow driven by two
+    # antagonistic pneumatic muscles, open loop, 10 ms: muscle-1 pressure command -> angle
+}
+
 #: the sweeps read from ``DIR/<name>.npz``: ``--<sweep>-records DIR`` runs a table's records
 #: into ``results/<stem>[_<split>].md`` (the third sweep's tables beside its account,
 #: results/realdata_fresh3.md)
@@ -199,4 +204,5 @@ SWEEPS = {"more": ("MORE", "realdata_more"), "fresh": ("FRESH", "realdata_fresh"
           "fresh12": ("FRESH12", "realdata_fresh12_table"),
           "fresh13": ("FRESH13", "realdata_fresh13_table"),
           "fresh14": ("FRESH14", "realdata_fresh14_table"),
-          "fresh15": ("FRESH15", "realdata_fresh15_table")}
+          "fresh15": ("FRESH15", "realdata_fresh15_table"),
+          "fresh16": ("FRESH16", "realdata_fresh16_table")}
