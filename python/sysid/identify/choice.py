@@ -7,7 +7,9 @@ import warnings
 from typing import Any
 
 import numpy as np
+from scipy.signal import lfilter
 
+from .._checks import PERSISTENT_DECAY, mode_kept
 from ..data.iodata import IOData
 from ..errors import DataError
 from .board import Board, bic, unstable
@@ -47,7 +49,7 @@ def _choose(board: Board, ranked: list[dict[str, Any]], data: IOData, stable_onl
         # unit circle by nothing the data say (often the search's stability bound), follows
         # the record's drift; among candidates the blocks cannot tell apart, one whose long-
         # term behaviour the data determine is preferred when there is one
-        determined = [t for t in fitted if not integrates_within(t[2], data)]
+        determined = [t for t in fitted if not follows_drift(t[2], data)]
         _, r, m = min(determined or fitted, key=lambda t: t[0])
         if determined and len(determined) < len(fitted):
             r["note"] = r["note"] or ("chosen by BIC over near-best re-fits whose mode acts as "
@@ -73,6 +75,57 @@ def _choose(board: Board, ranked: list[dict[str, Any]], data: IOData, stable_onl
     raise DataError("no candidate gave a stable model on this record; check the data "
                     "(offsets, an integrating process: difference the output) or fit one "
                     "model directly")
+
+
+#: the share of a model's response to the record's input (RMS, per output) above which
+#: its modes that act as integrators over the record count (:func:`follows_drift`)
+MATERIAL = 0.05
+
+
+def follows_drift(model: Any, data: IOData) -> bool:
+    """Whether ``model`` has modes that act as integrators over the record
+    (:func:`.notes.integrates_within`) and carry more than :data:`MATERIAL` of its response
+    to the record's input (RMS, the largest over the outputs; from rest): a slow mode that a
+    near-cancelling zero leaves unexcited does not count (a staircase test's output-error
+    fit: a pole at 1 - 1e-9 beside 0.975 and 0.896, validation 99.3 %), one that follows the
+    record's drift does (a twin rotor's: 37.7 %). A model the modal split cannot be made
+    for (a defective ``A``) counts when it integrates.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> d = sysid.IOData(u=np.random.default_rng(0).standard_normal(500), y=np.zeros(500))
+    >>> slow = [[1 - 1e-9, 0.0], [0.0, 0.5]]
+    >>> [follows_drift(sysid.StateSpaceModel(slow, [[b], [1.0]], [[1.0, 1.0]]), d)
+    ...  for b in (1.0, 1e-6)]
+    [True, False]
+    """
+    if not integrates_within(model, data):
+        return False
+    try:
+        ss = model if hasattr(model, "A") else model.to_statespace()
+        A, B, C = (np.asarray(x, float) for x in (ss.A, ss.B, ss.C))
+        lam, V = np.linalg.eig(A)
+        if np.linalg.cond(V) > 1e8:
+            return True
+        W = np.linalg.solve(V, B.astype(complex))  # modal input gains
+        slow = np.array([mode_kept(float(abs(z)), max(data.lengths)) > PERSISTENT_DECAY
+                         for z in lam])
+        out = []
+        for u, _ in data.experiments:
+            x = np.zeros((u.shape[0], lam.size), complex)  # every mode from rest
+            for k in range(lam.size):
+                x[:, k] = lfilter([0.0, 1.0], [1.0, -lam[k]], u @ W[k])
+            part = (x[:, slow] @ (C.astype(complex) @ V)[:, slow].T).real
+            full = (x @ (C.astype(complex) @ V).T).real
+            out.append((part, full))
+        part = np.vstack([p for p, _ in out])
+        full = np.vstack([f for _, f in out])
+        share = np.sqrt(np.mean(part ** 2, 0)) / np.maximum(np.sqrt(np.mean(full ** 2, 0)),
+                                                              1e-300)
+        return bool(np.max(share) > MATERIAL)
+    except Exception:  # noqa: BLE001 - no modal split: the pole test alone
+        return True
 
 
 def _refit_one(r: dict[str, Any], data: IOData, stable_only: bool) -> Any:
