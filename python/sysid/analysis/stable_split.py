@@ -61,8 +61,11 @@ def is_stable_pole(p: np.ndarray, dt: float, margin: float = 1e-8) -> np.ndarray
     return p.real < -margin * np.maximum(1.0, np.abs(p))
 
 
-def split_stable(A: np.ndarray, B: np.ndarray, C: np.ndarray, dt: float) -> StableSplit:
+def split_stable(A: np.ndarray, B: np.ndarray, C: np.ndarray, dt: float,
+                 radius: float | None = None) -> StableSplit:
     """Split ``(A, B, C)`` into decoupled stable and unstable parts (``dt = 0``: continuous).
+    ``radius`` (discrete time): the poles of modulus below it form the first part, instead
+    of the stable ones (a split of the fast modes from the slow ones).
 
     Raises :class:`~sysid.NumericalError` when a stable and an unstable pole are so close
     that the decoupling transformation is not computable to working precision.
@@ -70,7 +73,8 @@ def split_stable(A: np.ndarray, B: np.ndarray, C: np.ndarray, dt: float) -> Stab
     n = A.shape[0]
 
     def stable_first(re: np.ndarray, im: np.ndarray | None = None) -> bool:
-        return bool(is_stable_pole(np.asarray(re + 1j * (0.0 if im is None else im)), dt))
+        p = np.asarray(re + 1j * (0.0 if im is None else im))
+        return bool(is_stable_pole(p, dt) if radius is None else np.abs(p) < radius)
 
     T1, Q, ns = scipy.linalg.schur(A, output="real", sort=stable_first)
     A11, A12, A22 = T1[:ns, :ns], T1[:ns, ns:], T1[ns:, ns:]

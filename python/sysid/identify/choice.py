@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import PERSISTENT_DECAY, mode_kept
+from .._checks import PERSISTENT_DECAY
 from ..data.iodata import IOData
 from ..errors import DataError
 from .board import Board, bic, unstable
@@ -89,8 +89,10 @@ def follows_drift(model: Any, data: IOData) -> bool:
     to the record's input (RMS, the largest over the outputs; from rest): a slow mode that a
     near-cancelling zero leaves unexcited does not count (a staircase test's output-error
     fit: a pole at 1 - 1e-9 beside 0.975 and 0.896, validation 99.3 %), one that follows the
-    record's drift does (a twin rotor's: 37.7 %). A model the modal split cannot be made
-    for (a defective ``A``) counts when it integrates.
+    record's drift does (a twin rotor's: 37.7 %). The persistent modes are split off by
+    :func:`sysid.analysis.stable_split.split_stable` at the modulus where they keep
+    ``PERSISTENT_DECAY`` over the record; a model that split fails for counts when it
+    integrates.
 
     Examples
     --------
@@ -103,30 +105,22 @@ def follows_drift(model: Any, data: IOData) -> bool:
     """
     if not integrates_within(model, data):
         return False
-    try:
+    from ..analysis.stable_split import split_stable
+    from ..models.statespace import StateSpaceModel
+
+    try:  # the persistent modes split off (ordered Schur form), each part simulated
         ss = model if hasattr(model, "A") else model.to_statespace()
-        A, B, C = (np.asarray(x, float) for x in (ss.A, ss.B, ss.C))
-        lam, V = np.linalg.eig(A)
-        if np.linalg.cond(V) > 1e8:
-            return True
-        W = np.linalg.solve(V, B.astype(complex))  # modal input gains
-        slow = np.array([mode_kept(float(abs(z)), max(data.lengths)) > PERSISTENT_DECAY
-                         for z in lam])
-        out = []
-        for u, _ in data.experiments:
-            drive = u[:SHARE_SAMPLES] @ W.T  # (t, mode): every mode from rest, by recursion
-            x = np.zeros(drive.shape, complex)  # (a first stretch of the record suffices)
-            for t in range(1, drive.shape[0]):
-                x[t] = lam * x[t - 1] + drive[t - 1]
-            part = (x[:, slow] @ (C.astype(complex) @ V)[:, slow].T).real
-            full = (x @ (C.astype(complex) @ V).T).real
-            out.append((part, full))
-        part = np.vstack([p for p, _ in out])
-        full = np.vstack([f for _, f in out])
-        share = np.sqrt(np.mean(part ** 2, 0)) / np.maximum(np.sqrt(np.mean(full ** 2, 0)),
-                                                              1e-300)
+        radius = PERSISTENT_DECAY ** (1.0 / max(data.lengths))  # |z|^n above: persistent
+        slow = split_stable(np.asarray(ss.A, float), np.asarray(ss.B, float),
+                            np.asarray(ss.C, float), 1.0, radius=radius).unstable
+        m, l = slow[1].shape[1], slow[2].shape[0]
+        part = StateSpaceModel(*slow, np.zeros((l, m)))
+        us = [u[:SHARE_SAMPLES] for u, _ in data.experiments]
+        share = (np.sqrt(np.mean(np.vstack([part.simulate(u) for u in us]) ** 2, 0))
+                 / np.maximum(np.sqrt(np.mean(np.vstack([ss.simulate(u) for u in us]) ** 2,
+                                              0)), 1e-300))
         return bool(np.max(share) > MATERIAL)
-    except Exception:  # noqa: BLE001 - no modal split: the pole test alone
+    except Exception:  # noqa: BLE001 - no split to be had: the pole test alone
         return True
 
 

@@ -357,10 +357,11 @@ def check_feedback(data: IOData | tuple[Any, Any], lags: int | None = None, *, a
     if shortest < 2 * lags + 2:
         raise InsufficientDataError(f"lags = {lags} needs experiments of at least "
                                     f"{2 * lags + 2} samples; use fewer lags")
-    exps = [(u - u.mean(axis=0), y - y.mean(axis=0)) for u, y in data.experiments]
     periodic = non_periodic_parts(data, lags)
     if periodic is not None:  # the test on what changes from period to period
         exps, period, periods, scale = periodic
+    else:
+        exps = [(u - u.mean(axis=0), y - y.mean(axis=0)) for u, y in data.experiments]
     factor = _sysid.compress(exps, lags, 1, None, "qr")
     F, p, shares, q, df2, news = feedback_statistics(factor)
     if factor.n_columns <= lags * (data.n_inputs + data.n_outputs):
@@ -416,10 +417,11 @@ def non_periodic_parts(data: IOData, lags: int) -> tuple[list[Any], int, int, np
         u, y = u[:per * k], y[:per * k]
         total = total + np.sum((u - u.mean(axis=0)) ** 2, axis=0)
         us, ys = u.reshape(k, per, -1), y.reshape(k, per, -1)
+        su, sy = np.cumsum(us, axis=0), np.cumsum(ys, axis=0)  # running sums of the periods
         for j in range(1, k):
             w = np.sqrt(j / (j + 1.0))
-            cu = w * (us[:j].mean(axis=0) - us[j])
-            cy = w * (ys[:j].mean(axis=0) - ys[j])
+            cu = w * (su[j - 1] / j - us[j])
+            cy = w * (sy[j - 1] / j - ys[j])
             np_energy = np_energy + np.sum(cu ** 2, axis=0)
             out.append((cu - cu.mean(axis=0), cy - cy.mean(axis=0)))
     scale = np.where(total > 0, np_energy / np.where(total > 0, total, 1.0), 0.0)
