@@ -121,6 +121,10 @@ made and the findings: results/realdata_fresh15.md.
 ``--fresh16-records DIR`` (``FRESH16``, results/realdata_fresh16_table[_<split>].md): the
 sixteenth sweep's record (an elbow driven by two pneumatic muscles, validated on a second
 run); source, SHA-256, how the ``.npz`` is made and the findings: results/realdata_fresh16.md.
+``--fresh17-records DIR`` (``FRESH17``, results/realdata_fresh17_table[_<split>].md): the
+seventeenth sweep's records (a RoboCup robot's four wheel motors, a human ankle's stiffness, a
+3D-printer hot-end), each validated on a second run; sources, SHA-256, how each ``.npz`` is
+made and the findings: results/realdata_fresh17.md.
 
 Score: the simulation fit on the validation part, NRMSE %, ``100 (1 - |y - yhat| / |y -
 mean(y)|)`` averaged over outputs, with the initial state fitted by least squares on the
@@ -175,6 +179,7 @@ from realdata_records import (  # noqa: F401
     FRESH14,
     FRESH15,
     FRESH16,
+    FRESH17,
     MORE,
     SWEEPS,
 )

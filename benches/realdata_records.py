@@ -188,6 +188,18 @@ FRESH16 = {
     # antagonistic pneumatic muscles, open loop, 10 ms: muscle-1 pressure command -> angle
 }
 
+FRESH17 = {
+    # a RoboCup small-size robot lifted off the floor, 10 ms: one PWM duty to its four wheel
+    # motors -> the four wheel speeds (a second random-level run validates)
+    "robocup_wheel_motors": ("robocup_wheel_motors", "robocup_wheel_motors_val"),
+    # a human ankle under pseudo-random position perturbations, 1 ms: ankle angle -> ankle
+    # torque (another trial validates)
+    "ankle_stiffness": ("ankle_stiffness", "ankle_stiffness_val"),
+    # a 3D-printer hot-end on a HeatShield board, 2 s: heater duty -> temperature (a
+    # staircase of duties validates)
+    "heatshield_hotend": ("heatshield_hotend", "heatshield_hotend_val"),
+}
+
 #: the sweeps read from ``DIR/<name>.npz``: ``--<sweep>-records DIR`` runs a table's records
 #: into ``results/<stem>[_<split>].md`` (the third sweep's tables beside its account,
 #: results/realdata_fresh3.md)
@@ -205,4 +217,5 @@ SWEEPS = {"more": ("MORE", "realdata_more"), "fresh": ("FRESH", "realdata_fresh"
           "fresh13": ("FRESH13", "realdata_fresh13_table"),
           "fresh14": ("FRESH14", "realdata_fresh14_table"),
           "fresh15": ("FRESH15", "realdata_fresh15_table"),
-          "fresh16": ("FRESH16", "realdata_fresh16_table")}
+          "fresh16": ("FRESH16", "realdata_fresh16_table"),
+          "fresh17": ("FRESH17", "realdata_fresh17_table")}
