@@ -125,6 +125,10 @@ run); source, SHA-256, how the ``.npz`` is made and the findings: results/realda
 seventeenth sweep's records (a RoboCup robot's four wheel motors, a human ankle's stiffness, a
 3D-printer hot-end), each validated on a second run; sources, SHA-256, how each ``.npz`` is
 made and the findings: results/realdata_fresh17.md.
+``--fresh18-records DIR`` (``FRESH18``, results/realdata_fresh18_table[_<split>].md): the
+eighteenth sweep's records (a robot joint actuator on a dynamometer, a DC motor with a
+tachogenerator, a cantilever on a shaker), each validated on a second run; sources, SHA-256,
+how each ``.npz`` is made and the findings: results/realdata_fresh18.md.
 
 Score: the simulation fit on the validation part, NRMSE %, ``100 (1 - |y - yhat| / |y -
 mean(y)|)`` averaged over outputs, with the initial state fitted by least squares on the
@@ -180,6 +184,7 @@ from realdata_records import (  # noqa: F401
     FRESH15,
     FRESH16,
     FRESH17,
+    FRESH18,
     MORE,
     SWEEPS,
 )

@@ -200,6 +200,18 @@ FRESH17 = {
     "heatshield_hotend": ("heatshield_hotend", "heatshield_hotend_val"),
 }
 
+FRESH18 = {
+    # a legged robot's joint actuator on a dynamometer, 5 ms (interpolated from an irregular
+    # log): a random current command -> shaft speed, torque (another day's run validates)
+    "actuator_dyno_ex8": ("actuator_dyno_ex8", "actuator_dyno_ex8_val"),
+    # a DC motor driving a tachogenerator through a belt, 0.1 s: a PWM command of random
+    # levels -> tacho voltage (a second run validates)
+    "motor_tacho_belt": ("motor_tacho_belt", "motor_tacho_belt_val"),
+    # a steel cantilever on an electromagnetic shaker, 1/3200 s: three tones of drive voltage
+    # -> load-cell force, tip acceleration (a second test validates)
+    "cantilever_beam_shaker": ("cantilever_beam_shaker", "cantilever_beam_shaker_val"),
+}
+
 #: the sweeps read from ``DIR/<name>.npz``: ``--<sweep>-records DIR`` runs a table's records
 #: into ``results/<stem>[_<split>].md`` (the third sweep's tables beside its account,
 #: results/realdata_fresh3.md)
@@ -218,4 +230,5 @@ SWEEPS = {"more": ("MORE", "realdata_more"), "fresh": ("FRESH", "realdata_fresh"
           "fresh14": ("FRESH14", "realdata_fresh14_table"),
           "fresh15": ("FRESH15", "realdata_fresh15_table"),
           "fresh16": ("FRESH16", "realdata_fresh16_table"),
-          "fresh17": ("FRESH17", "realdata_fresh17_table")}
+          "fresh17": ("FRESH17", "realdata_fresh17_table"),
+          "fresh18": ("FRESH18", "realdata_fresh18_table")}
