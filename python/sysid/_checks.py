@@ -34,8 +34,7 @@ def as_2d(x: Any, name: str, *, ncols: int | None = None, allow_empty: bool = Fa
     elif arr.ndim != 2:
         raise ShapeError(
             f"{name} must be 1-D or 2-D (samples, channels), "
-            f"got {arr.ndim}-D with shape {arr.shape}"
-        )
+            f"got {arr.ndim}-D with shape {arr.shape}")
     if arr.shape[0] == 0 and not allow_empty:
         raise ShapeError(f"{name} has no samples (shape {arr.shape})")
     if ncols is not None and arr.shape[1] != ncols:
@@ -52,8 +51,7 @@ def as_2d(x: Any, name: str, *, ncols: int | None = None, allow_empty: bool = Fa
         bad = np.argwhere(~np.isfinite(arr))[0]
         raise NonFiniteError(
             f"{name} has a non-finite value (NaN or Inf) at sample {bad[0]}, channel {bad[1]}; "
-            "interpolate or cut it out before identification"
-        )
+            "interpolate or cut it out before identification")
     return arr
 
 
@@ -86,8 +84,7 @@ def real_array(x: Any, name: str) -> np.ndarray:
     if arr.dtype.kind not in "biuf":
         raise DataError(
             f"{name} must be a real numeric array, got dtype {arr.dtype}; convert it with "
-            f"np.asarray({name}, dtype=float)"
-        )
+            f"np.asarray({name}, dtype=float)")
     return arr.astype(np.float64, copy=False)
 
 
@@ -109,8 +106,7 @@ def unmask(x: Any, name: str) -> Any:
         raise NonFiniteError(
             f"{name} is a masked array with {int(mask.sum())} masked value(s) (the first at "
             f"index {where}); masked samples are missing data: pass {name}.filled(np.nan) to "
-            "IOData.from_raw (which interpolates short gaps) or cut them out"
-        )
+            "IOData.from_raw (which interpolates short gaps) or cut them out")
     return np.ma.getdata(x)
 
 
@@ -499,15 +495,13 @@ def check_covariance(P: np.ndarray, name: str) -> np.ndarray:
     if asym > 1e-8 * scale:
         raise DataError(
             f"{name} must be symmetric, but {name} - {name}.T has entries of size {asym:.3g}; "
-            f"pass (P + P.T) / 2 if the asymmetry is round-off"
-        )
+            f"pass (P + P.T) / 2 if the asymmetry is round-off")
     P = 0.5 * (P + P.T)
     low = float(np.min(np.linalg.eigvalsh(P))) if P.size else 0.0
     if low < -1e-10 * scale:
         raise DataError(
             f"{name} must be positive semi-definite (a covariance), but it has the negative "
-            f"eigenvalue {low:.3g}"
-        )
+            f"eigenvalue {low:.3g}")
     return P
 
 
@@ -566,6 +560,14 @@ def constant_channels(arrays: list[np.ndarray], about: str = "each") -> np.ndarr
     return spread <= CONSTANT_TOL
 
 
+def require_samples(lengths: list[int], who: str) -> None:
+    """Refuse (``InsufficientDataError``) a record of one sample per experiment, for ``who``."""
+    if lengths and max(lengths) < 2:
+        raise errors.InsufficientDataError(
+            f"too few samples: each experiment has one sample, too few for {who}; give a "
+            "longer record")
+
+
 def require_inputs_vary(exps: list[tuple[np.ndarray, np.ndarray]], who: str,
                         names: Any = None, side: int = 0, error: type = DataError) -> None:
     """Refuse a record in which an input (``side=1``: an output) is constant in every
@@ -582,9 +584,7 @@ def require_inputs_vary(exps: list[tuple[np.ndarray, np.ndarray]], who: str,
     sysid.errors.DataError: input u0 is 0 in every sample: bj cannot estimate ...
     """
     kind = ("input", "output")[side]
-    if exps and max(len(e[side]) for e in exps) < 2:  # one sample: every channel "constant"
-        raise errors.InsufficientDataError(f"too few samples: each experiment has one sample; "
-                                           f"{who} needs a longer record")
+    require_samples([len(e[side]) for e in exps], who)  # else every channel "constant"
     flat = constant_channels([e[side] for e in exps], "all")
     for j in np.flatnonzero(flat):
         first = next(e[side][0, j] for e in exps if len(e[side]))

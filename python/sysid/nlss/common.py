@@ -30,13 +30,11 @@ class Scaling:
 
     @classmethod
     def of(cls, data: IOData) -> Scaling:
-        from .._checks import check_magnitudes
+        from .._checks import check_magnitudes, require_samples
 
         # outputs near 1e200 overflowed the std and were called "constant (0)"
         check_magnitudes(data, "the nonlinear state-space fits")
-        if max(data.lengths) < 2:  # one sample: every channel would be called "constant"
-            raise InsufficientDataError("too few samples: each experiment has one sample; a "
-                                        "nonlinear state-space model needs a longer record")
+        require_samples(data.lengths, "a nonlinear state-space model")  # else "constant"
         u = np.vstack([e[0] for e in data.experiments])
         y = np.vstack([e[1] for e in data.experiments])
         su, sy = u.std(axis=0), y.std(axis=0)

@@ -47,6 +47,7 @@ from .._checks import (
     check_magnitudes,
     record_stats,
     require_inputs_vary,
+    require_samples,
     user_stacklevel,
 )
 from .._display import pvalue
@@ -58,7 +59,6 @@ from ..errors import (
     DataError,
     ExcitationError,
     FeedbackWarning,
-    InsufficientDataError,
     OrderError,
     RiccatiError,
     SysidError,
@@ -109,9 +109,7 @@ def _preprocessing(data: IOData, from_factor: bool) -> dict[str, Any]:
 def _check_signals(data: IOData) -> None:
     """Refuse constant outputs and inputs (naming the channel); warn (OffsetWarning) about
     offsets; channels out of double precision's range first (their variance underflows)."""
-    if max(data.lengths) < 2:  # else the one sample would be called "constant" below
-        raise InsufficientDataError("too few samples: each experiment has one sample; the "
-                                    "subspace methods need a longer record")
+    require_samples(data.lengths, "the subspace methods")  # else "constant" below
     stats = record_stats(data)  # one pass over the record for the three checks
     check_magnitudes(data, "the subspace methods", stats)
     if 1 in stats:
