@@ -90,6 +90,38 @@ def test_poor_inputs_still_warn():
     assert not _excitation_warnings(lambda: sysid.n4sid(_record(three), 3))
 
 
+@pytest.mark.parametrize("snr_db", [30, 40, 60])
+def test_measured_tones_warn_like_their_spectrum(snr_db):
+    """A shaker's drive of three tones, measured with sensor noise 30-60 dB below them: the
+    noise keeps the lag matrix of full rank at any rounding tolerance (the fit read order
+    22 and stayed silent at order 11), but the spectrum has 6 lines, and the fit's warning
+    says what ``persistent_excitation_order`` says."""
+    t = np.arange(8 * N)
+    three = sum(np.sin(2 * np.pi * f * t + ph) for f, ph in ((0.031, 1.0), (0.0375, 2.0),
+                                                             (0.047, 3.0)))
+    rng = np.random.default_rng(snr_db)
+    u = three + np.sqrt(1.5) * 10 ** (-snr_db / 20) * rng.standard_normal(t.size)
+    true = sysid.StateSpaceModel([[0.9, 0.2], [-0.2, 0.9]], [[1.0], [0.5]], [[1.0, 0.0]],
+                                 dt=1.0)
+    data = sysid.IOData(u=u, y=true.simulate(u) + 0.01 * rng.standard_normal((t.size, 1)),
+                        dt=1.0)
+    assert sysid.persistent_excitation_order(u, 40) == 6
+    est = sysid.SubspaceEstimator(data)
+    assert _excitation_warnings(lambda: est.fit(11))
+    assert _excitation_warnings(lambda: est.fit(4))
+    assert not _excitation_warnings(lambda: est.fit(3))
+
+
+def test_white_noise_and_a_noisy_tone_read_rich_without_the_spectrum():
+    """The fast path: an input whose lag covariance is within 30 dB of flat (white noise, a
+    tone in noise of its own power) is rich without a pass over the data."""
+    rng = np.random.default_rng(5)
+    for u in (rng.standard_normal(N), np.sin(0.3 * T) + rng.standard_normal(N)):
+        est = sysid.SubspaceEstimator(_record(u))
+        assert not _excitation_warnings(lambda e=est: e.fit(8))
+        assert "spectrum" not in est._pe_cache
+
+
 def test_several_inputs_count_the_weakest_direction_whatever_the_units():
     rng = np.random.default_rng(4)
     u = rng.standard_normal((N, 2))

@@ -40,6 +40,12 @@ SEGMENT = 1 << 16
 JOINT_SEGMENT = 1 << 12
 #: Default relative power threshold of an excited bin (50 dB below the strongest).
 TOL = 1e-5
+#: Relative eigenvalue floor of the Gram matrix of an input's stacked lags above which the
+#: input counts as plainly rich without reading its spectrum (a spectrum within 30 dB of
+#: flat over those lags: :meth:`sysid.SubspaceEstimator._excitation_order`'s fast path).
+FLAT_LAGS = 1e-3
+#: ... and the floor of the rank test when only a data matrix's factor is at hand (rounding).
+RANK_LAGS = 1e-9
 #: Mismatch between periods (relative to the variance) below which an input counts as
 #: periodic and its lines are counted exactly: a generated input repeats to rounding (a
 #: sinusoid of a period that is not a whole number of samples does not).

@@ -51,6 +51,7 @@ from .._checks import (
     user_stacklevel,
 )
 from .._display import pvalue
+from ..data.excitation import FLAT_LAGS, RANK_LAGS, spectral_excitation_order
 from ..data.input_design import warn_excitation
 from ..data.iodata import IOData, require_record
 from ..data.offsets import check_offsets
@@ -755,24 +756,24 @@ class SubspaceEstimator:
         warn_unstable(model, info["method"])
         return model
 
-    def _excitation_order(self, needed: int, tol: float = 1e-9) -> int:
-        """Persistent-excitation order of the input, up to ``needed``.
-
-        First the rank of the input rows of the factor, with no pass over the data (the
-        largest ``d <= min(needed, past + future)`` for which the input's block Hankel
-        matrix with ``d`` block rows has eigenvalues of its Gram matrix above ``tol`` times
-        the largest): full rank means persistently exciting. Only when it is not, the
-        excited lines of the input's spectrum decide (:mod:`sysid.data.excitation`, once per
-        estimator): the lag rank takes a band-limited multisine for a poorly exciting input
-        however many lines it has. Built from a factor alone, the rank decides."""
+    def _excitation_order(self, needed: int) -> int:
+        """Persistent-excitation order of the input, up to ``needed``: the count of excited
+        lines of its spectrum (:mod:`sysid.data.excitation`, once per estimator), as
+        :func:`sysid.persistent_excitation_order` gives it: the warning and the user's check
+        agree. The spectrum is read only when the input is not plainly rich: first the rank
+        of the input rows of the factor, no pass over the data (the largest ``d <= min(needed,
+        past + future)`` for which the input's block Hankel matrix with ``d`` block rows has
+        the eigenvalues of its Gram matrix within ``FLAT_LAGS`` of the largest). A rank test
+        at a rounding tolerance counts sensor noise 40 dB below a few tones as excitation (a
+        shaker's three-tone drive read 22, its spectrum 6). From a factor alone, the rank at
+        ``RANK_LAGS`` decides."""
         if needed not in self._pe_cache:
             # in the Rust core on the calling thread: one Cholesky of G - tol top I answers
             # every d (the first non-positive pivot), no threaded LAPACK call
+            tol = RANK_LAGS if self._from_factor else FLAT_LAGS
             got = int(_sysid.excitation_order(self.scaled_factor, needed, tol))
             if got < needed and not self._from_factor:
                 if "spectrum" not in self._pe_cache:
-                    from ..data.excitation import spectral_excitation_order
-
                     us = [np.ascontiguousarray(u) for u, _ in self.data.experiments]
                     self._pe_cache["spectrum"] = spectral_excitation_order(us)
                 got = min(needed, self._pe_cache["spectrum"])
