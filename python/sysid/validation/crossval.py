@@ -51,7 +51,7 @@ import numpy as np
 
 from .. import _sysid
 from ..data.iodata import IOData
-from ..errors import DataError, InsufficientDataError, SysidError
+from ..errors import DataError, ExcitationError, InsufficientDataError, SysidError
 from .stable_orders import stable_first, unstable_orders
 from .swept import PIECES, SHORTEST, interleaved_folds, swept
 from .ties import RESOLUTION, TOL, slack, tie, wins_every_block
@@ -648,7 +648,7 @@ def cross_validated_order(
             h = estimator(data, method=method).past
     from ..data.segments import long_enough
 
-    fitted = []  # (estimator, held-out block) per fold
+    fitted, skipped = [], 0  # (estimator, held-out block) per fold; folds left out
     for fit_part, held in record_folds(data):
         # the given horizons, clipped to a quarter of the fitted part; else the record's
         longest = max(fit_part.lengths)
@@ -659,7 +659,16 @@ def cross_validated_order(
                            or 2 * kw["horizon"]) or fit_part
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            fitted.append((estimator(part, method=method, **kw), held))
+            try:
+                fitted.append((estimator(part, method=method, **kw), held))
+            except ExcitationError:
+                # the record without this block excites too little for the window (a
+                # ramp or a step inside the block): the other folds judge, as in identify
+                skipped += 1
+    if len(fitted) < 2 and skipped:
+        raise ExcitationError(f"{skipped} of the {skipped + len(fitted)} parts fitted without "
+                              f"one held-out block are not persistently exciting for the "
+                              f"window: too few left to cross-validate")
 
     def score(grid: Any) -> dict[int, float]:
         for est, held in fitted:
