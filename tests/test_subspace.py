@@ -373,3 +373,38 @@ def test_matrices_is_checked_and_reaches_the_order_choice():
         model = est.fit("auto", feedthrough=False)
     assert seen and set(seen) == {"states"}  # every fold's estimator
     assert model.nstates == 1
+
+
+def test_an_order_at_the_data_matrix_rank_says_why_it_cannot_be_fitted():
+    """A tracking loop's record: a slow seven-sine reference, an operator's force (a filter
+    of it plus coloured remnant) and a cursor integrated from that force (deterministic).
+    The weighted data matrix has rank 22 (the force's 20 future rows and the cursor's two
+    states); at order 22 the least-squares design of B has deficient rank, and the fit said
+    "non-finite estimates; the data may be degenerate". Now the error names the cause and
+    the order to take (a minimum-norm B was tried: it simulated nothing of the record)."""
+    from scipy import signal
+
+    rng = np.random.default_rng(1)
+    dt, n_samples = 1 / 60, 2700
+    t = np.arange(n_samples) * dt
+    r = sum(np.sin(2 * np.pi * f * t + rng.uniform(0, 6)) / p
+            for f, p in ((0.1, 2), (0.15, 3), (0.25, 5), (0.35, 7), (0.55, 11), (0.65, 13),
+                         (0.85, 17)))
+    r *= np.minimum(1.0, (t / 5) ** 2)
+    force = (signal.lfilter([0.05], [1, -0.95], r)
+             + signal.lfilter([0.02], [1, -0.9], rng.standard_normal(n_samples)))
+    cursor, speed = np.zeros(n_samples), 0.0
+    for k in range(1, n_samples):
+        speed += dt * (force[k - 1] - speed)
+        cursor[k] = cursor[k - 1] + dt * speed
+    d = sysid.IOData(u=r, y=np.c_[force, cursor], dt=dt)
+    est = sysid.SubspaceEstimator(d)
+    top = est.max_order
+    sv = est.singular_values
+    assert top == 22 and sv[top] < 1e-12 * sv[0]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")   # order 22 is more than the seven sines excite
+        assert np.all(np.isfinite(est.fit(top - 1).B))
+        with pytest.raises(sysid.errors.NumericalError,
+                           match="does not determine B at order 22.*choose order 21"):
+            est.fit(top)

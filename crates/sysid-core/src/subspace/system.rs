@@ -304,7 +304,26 @@ pub fn identify(
         }
         let theta = if n_theta > 0 {
             // sequential QR: the same bits for any thread count
-            crate::linalg::lstsq_seq(design.as_ref(), rhs.as_ref())
+            let theta = crate::linalg::lstsq_seq(design.as_ref(), rhs.as_ref());
+            if !theta.col(0).iter().all(|v| v.is_finite()) {
+                // a design of deficient rank: an order at the data matrix's numerical rank
+                // whose last state the input does not reach (a minimum-norm B simulated
+                // nothing of a tracking record that order n - 1 fits at 25 %)
+                return Err(SysidError::numerical(
+                    "B and D",
+                    format!(
+                        "the input does not determine B at order {n} (the least-squares \
+                         design of B and D has deficient rank: the order is at the numerical \
+                         rank of the data matrix, or above what the input excites); {}",
+                        if n > 1 {
+                            format!("choose order {} or lower", n - 1)
+                        } else {
+                            "use a richer input".to_string()
+                        }
+                    ),
+                ));
+            }
+            theta
         } else {
             Mat::zeros(0, 1)
         };
