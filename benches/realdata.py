@@ -129,6 +129,14 @@ made and the findings: results/realdata_fresh17.md.
 eighteenth sweep's records (a robot joint actuator on a dynamometer, a DC motor with a
 tachogenerator, a cantilever on a shaker), each validated on a second run; sources, SHA-256,
 how each ``.npz`` is made and the findings: results/realdata_fresh18.md.
+``--fresh19-records DIR`` (``FRESH19``, results/realdata_fresh19_table[_<split>].md): the
+nineteenth sweep's records (a human operator in a tracking loop, waves in a towing basin, a
+DC plasma reactor), each validated on a second run; sources, SHA-256, how each ``.npz`` is
+made and the findings: results/realdata_fresh19.md.
+``--fresh20-records DIR`` (``FRESH20``, results/realdata_fresh20_table[_<split>].md): the
+twentieth sweep's records (an unloaded instrumented treadmill, two carts coupled by a
+spring), each validated on a second run; sources, SHA-256, how each ``.npz`` is made and the
+findings: results/realdata_fresh20.md.
 
 Score: the simulation fit on the validation part, NRMSE %, ``100 (1 - |y - yhat| / |y -
 mean(y)|)`` averaged over outputs, with the initial state fitted by least squares on the
@@ -185,6 +193,8 @@ from realdata_records import (  # noqa: F401
     FRESH16,
     FRESH17,
     FRESH18,
+    FRESH19,
+    FRESH20,
     MORE,
     SWEEPS,
 )

@@ -212,6 +212,28 @@ FRESH18 = {
     "cantilever_beam_shaker": ("cantilever_beam_shaker", "cantilever_beam_shaker_val"),
 }
 
+FRESH19 = {
+    # a human operator tracking a seven-sine reference with a slider on a simulated
+    # second-order machine, 1/60 s: reference -> slider force, cursor position (closed
+    # through the human; another trial, other phases, validates)
+    "hitl_tracking": ("hitl_tracking", "hitl_tracking_val"),
+    # irregular waves in a towing basin, 0.1 s: wavemaker flap angle -> wave elevation at
+    # two probes 26 and 30 m down the basin (the same drive at half amplitude validates)
+    "wave_flume_flap": ("wave_flume_flap", "wave_flume_flap_val"),
+    # a DC glow-discharge plasma reactor, 20 us: a two-level current command -> the probe
+    # voltages either side of the reactor, the discharge current (a second capture validates)
+    "plasma_dc": ("plasma_dc", "plasma_dc_val"),
+}
+
+FRESH20 = {
+    # an unloaded instrumented treadmill, 0.01 s: measured belt speed (a random profile
+    # around 2 m/s) -> the force plates' pitch moment (another trial validates)
+    "treadmill_pitch": ("treadmill_pitch", "treadmill_pitch_val"),
+    # two carts coupled by a spring, 1 ms: a square wave of motor voltage -> both carts'
+    # velocities (a run at three quarters of the amplitude validates)
+    "mte360_twocart": ("mte360_twocart", "mte360_twocart_val"),
+}
+
 #: the sweeps read from ``DIR/<name>.npz``: ``--<sweep>-records DIR`` runs a table's records
 #: into ``results/<stem>[_<split>].md`` (the third sweep's tables beside its account,
 #: results/realdata_fresh3.md)
@@ -231,4 +253,6 @@ SWEEPS = {"more": ("MORE", "realdata_more"), "fresh": ("FRESH", "realdata_fresh"
           "fresh15": ("FRESH15", "realdata_fresh15_table"),
           "fresh16": ("FRESH16", "realdata_fresh16_table"),
           "fresh17": ("FRESH17", "realdata_fresh17_table"),
-          "fresh18": ("FRESH18", "realdata_fresh18_table")}
+          "fresh18": ("FRESH18", "realdata_fresh18_table"),
+          "fresh19": ("FRESH19", "realdata_fresh19_table"),
+          "fresh20": ("FRESH20", "realdata_fresh20_table")}
