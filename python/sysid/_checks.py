@@ -727,9 +727,8 @@ def _constant(data: Any, idx: int, j: int) -> bool:
 
 
 def user_stacklevel() -> int:
-    """``stacklevel`` for ``warnings.warn`` called by the caller of this function that points
-    at the first frame outside the sysid package (the user's line, however deep inside sysid
-    the warning is raised).
+    """``stacklevel`` for the caller's ``warnings.warn`` that points at the first frame outside
+    sysid and contextlib (the user's line, however deep inside sysid the warning is raised).
 
     Examples
     --------
@@ -737,12 +736,13 @@ def user_stacklevel() -> int:
     >>> user_stacklevel() >= 1
     True
     """
+    import contextlib
     import os
     import sys
 
-    pkg = os.path.dirname(os.path.abspath(__file__)) + os.sep
+    skip = (os.path.dirname(os.path.abspath(__file__)) + os.sep, contextlib.__file__)
     frame, level = sys._getframe(1), 1
-    while frame is not None and frame.f_code.co_filename.startswith(pkg):
+    while frame is not None and frame.f_code.co_filename.startswith(skip):
         frame, level = frame.f_back, level + 1
     return level
 

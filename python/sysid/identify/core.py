@@ -112,6 +112,7 @@ from .integrating import integrating_candidates, integrating_note
 from .notes import (
     excitation_check,
     loop_checks,
+    order_excitation_check,
     persistent_mode_check,
     refit_cap_check,
     trend_check,
@@ -775,6 +776,7 @@ def identify(
     if "identify_refit" in model.info:
         checks["final_refit"] = model.info["identify_refit"]
     refit_cap_check(model, checks)
+    order_excitation_check(int(chosen["order"]), centred, checks)
     trend_check(model, centred, checks)
     persistent_mode_check(model, centred, checks)
     weak_check(float(chosen["held_out_fit"]), checks)

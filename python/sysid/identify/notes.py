@@ -1,4 +1,5 @@
-"""Notes :func:`sysid.identify` adds to its checks about the model it chose: a drift the input
+"""Notes :func:`sysid.identify` adds to its checks about the model it chose: an order the
+input's excitation does not determine (``checks["order_excitation"]``), a drift the input
 does not explain (``checks["trend"]``), a mode that does not decay over the record
 (``checks["persistent_mode"]``), a model that explains less than half of what the
 outputs do on the held-out blocks (``checks["weak"]``), and a final re-fit stopped at its
@@ -16,8 +17,8 @@ from ..data.iodata import IOData
 from ..models.continuous import ContinuousStateSpace
 from ..validation.crossval import trend_share
 
-__all__ = ["excitation_check", "trend_check", "integrates_within", "persistent_mode_check",
-           "weak_check", "refit_cap_check", "loop_checks", "loop_feedthrough_check",
+__all__ = ["excitation_check", "order_excitation_check", "trend_check", "integrates_within",
+           "persistent_mode_check", "weak_check", "refit_cap_check", "loop_checks", "loop_feedthrough_check",
            "loop_bias_check", "TREND_SHARE", "TREND_OUTPUT", "PERSISTENT_DECAY", "WEAK_FIT"]
 
 #: a held-out fit below this (in %) explains less than half of the outputs' variation
@@ -64,6 +65,47 @@ def excitation_check(data: IOData) -> str:
             "pulses, whose responses alone determine their paths"
             + (f"; the other input(s) persistently exciting of order {order(rest)}"
                if rest else ""))
+
+
+def order_excitation_check(order: int, data: IOData, checks: dict[str, Any]) -> None:
+    """``checks["order_excitation"]`` and an :class:`~sysid.ExcitationWarning` when the chosen
+    model's ``order`` needs an input persistently exciting of order ``2 order`` and the
+    input's spectral count (:func:`sysid.persistent_excitation_order`) is less, as every
+    estimator warns of its own fit: between the input's excited frequencies the model's
+    response is then set by the noise, not by the input (a shaker's three tones, order 6,
+    chose order 11: held out 80.9 %, 49.6 % on another test of the same tones). Inputs that
+    change at a few samples only (steps, pulses) are left to their own path.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid, warnings
+    >>> from sysid.identify.notes import order_excitation_check
+    >>> u = np.sin(0.3 * np.arange(500))          # one sinusoid: order 2
+    >>> checks = {}
+    >>> with warnings.catch_warnings():
+    ...     warnings.simplefilter("ignore")
+    ...     order_excitation_check(3, sysid.IOData(u, u, 1.0), checks)
+    >>> checks["order_excitation"][:52]
+    'the chosen order 3 needs an input persistently excit'
+    """
+    from .._checks import user_stacklevel
+    from ..data.input_design import persistent_excitation_order, warn_excitation
+    from ..subspace.steptest import stepped_inputs
+
+    if data.n_inputs == 0 or stepped_inputs(data):
+        return
+    us = [e[0] for e in data.experiments]
+    got = persistent_excitation_order(us if len(us) > 1 else us[0], 2 * order)
+    if got >= 2 * order:
+        return
+    checks["order_excitation"] = (
+        f"the chosen order {order} needs an input persistently exciting of order "
+        f"{2 * order}, and the input is of order {got}: between its excited frequencies the "
+        f"model's response is set by the noise, not by the input, and the held-out blocks "
+        f"(the same input) cannot tell; validate it on a record of another input, or fit "
+        f"order {max(1, got // 2)} (sysid.ssest(data, {max(1, got // 2)}, "
+        f"focus='simulation'))")
+    warn_excitation(got, order, stacklevel=user_stacklevel())
 
 
 def trend_check(model: Any, data: IOData, checks: dict[str, Any]) -> None:
