@@ -18,8 +18,9 @@ from ..models.continuous import ContinuousStateSpace
 from ..validation.crossval import trend_share
 
 __all__ = ["excitation_check", "order_excitation_check", "trend_check", "integrates_within",
-           "persistent_mode_check", "weak_check", "refit_cap_check", "loop_checks", "loop_feedthrough_check",
-           "loop_bias_check", "TREND_SHARE", "TREND_OUTPUT", "PERSISTENT_DECAY", "WEAK_FIT"]
+           "persistent_mode_check", "weak_check", "refit_cap_check", "loop_checks",
+           "loop_feedthrough_check", "loop_bias_check", "TREND_SHARE", "TREND_OUTPUT",
+           "PERSISTENT_DECAY", "WEAK_FIT"]
 
 #: a held-out fit below this (in %) explains less than half of the outputs' variation
 #: (``fit = 100 (1 - sqrt(1 - explained))``): ``checks["weak"]`` says so
