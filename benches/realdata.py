@@ -137,6 +137,10 @@ made and the findings: results/realdata_fresh19.md.
 twentieth sweep's records (an unloaded instrumented treadmill, two carts coupled by a
 spring), each validated on a second run; sources, SHA-256, how each ``.npz`` is made and the
 findings: results/realdata_fresh20.md.
+``--fresh21-records DIR`` (``FRESH21``, results/realdata_fresh21_table[_<split>].md): the
+twenty-first sweep's records (an air pump pressurising a leaky vessel, one run split 2/3 /
+1/3; a cyclist's heart rate against an ergometer's power, validated on a second ride);
+sources, SHA-256, how each ``.npz`` is made and the findings: results/realdata_fresh21.md.
 
 Score: the simulation fit on the validation part, NRMSE %, ``100 (1 - |y - yhat| / |y -
 mean(y)|)`` averaged over outputs, with the initial state fitted by least squares on the
@@ -195,6 +199,7 @@ from realdata_records import (  # noqa: F401
     FRESH18,
     FRESH19,
     FRESH20,
+    FRESH21,
     MORE,
     SWEEPS,
 )

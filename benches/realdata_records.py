@@ -234,6 +234,15 @@ FRESH20 = {
     "mte360_twocart": ("mte360_twocart", "mte360_twocart_val"),
 }
 
+FRESH21 = {
+    # an air pump pressurising a leaky vessel (AutomationShield PressureShield), 10 ms: pump
+    # command of random levels -> pressure (one run: first 2/3 / last 1/3)
+    "pressureshield": ("pressureshield", None),
+    # a rider on a cycle ergometer, 1 s: power (a step test) -> heart rate (a video ride of
+    # freely varying power six days later validates)
+    "ergometer_hr": ("ergometer_hr", "ergometer_hr_val"),
+}
+
 #: the sweeps read from ``DIR/<name>.npz``: ``--<sweep>-records DIR`` runs a table's records
 #: into ``results/<stem>[_<split>].md`` (the third sweep's tables beside its account,
 #: results/realdata_fresh3.md)
@@ -255,4 +264,5 @@ SWEEPS = {"more": ("MORE", "realdata_more"), "fresh": ("FRESH", "realdata_fresh"
           "fresh17": ("FRESH17", "realdata_fresh17_table"),
           "fresh18": ("FRESH18", "realdata_fresh18_table"),
           "fresh19": ("FRESH19", "realdata_fresh19_table"),
-          "fresh20": ("FRESH20", "realdata_fresh20_table")}
+          "fresh20": ("FRESH20", "realdata_fresh20_table"),
+          "fresh21": ("FRESH21", "realdata_fresh21_table")}
