@@ -80,7 +80,7 @@ def test_the_warning_identify_and_advice_give_the_share() -> None:
     # identify reads the same test (its checks, without a full search here)
     from sysid.identify.core import _checks
 
-    checks, detected = _checks(data)
+    checks, detected, _ = _checks(data)
     assert detected and "% of the input's variance" in checks["feedback"]
 
 
@@ -118,7 +118,7 @@ def test_an_integrating_controller_is_sized_by_the_part_the_inputs_past_leaves()
         sysid.n4sid(data, 1, feedthrough=False)
     from sysid.identify.core import _checks
 
-    checks, detected = _checks(data)
+    checks, detected, _ = _checks(data)
     assert detected and "of the part its own past does not predict" in checks["feedback"]
     # an open-loop white input: what past outputs explain of its new part is small as well
     rng = np.random.default_rng(2)

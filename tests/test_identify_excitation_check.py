@@ -23,7 +23,7 @@ def test_the_count_is_exact_below_forty():
 
     t = np.arange(400.0)
     u = np.c_[np.sin(0.3 * t)]
-    assert excitation_check(sysid.IOData(u, np.zeros((400, 1)), 1.0)) == (
+    assert excitation_check(sysid.IOData(u, np.zeros((400, 1)), 1.0))[0] == (
         "input persistently exciting of order 2")
 
 
@@ -36,7 +36,7 @@ def test_a_chosen_order_the_input_does_not_determine_is_said_and_warned():
     import warnings
 
     from sysid.errors import ExcitationWarning
-    from sysid.identify.notes import order_excitation_check
+    from sysid.identify.notes import excitation_check, order_excitation_check
 
     rng = np.random.default_rng(0)
     t = np.arange(3000)
@@ -44,11 +44,12 @@ def test_a_chosen_order_the_input_does_not_determine_is_said_and_warned():
     u = u + 1e-3 * rng.standard_normal(t.size)
     data = sysid.IOData(u, np.zeros((t.size, 1)), 1.0)
     checks: dict = {}
+    counted = excitation_check(data)[1]
     with warnings.catch_warnings(record=True) as said:
         warnings.simplefilter("always")
-        order_excitation_check(3, data, checks)
+        order_excitation_check(3, data, checks, counted)
         assert not checks and not said
-        order_excitation_check(4, data, checks)
+        order_excitation_check(4, data, checks, counted)
     assert "chosen order 4 needs an input persistently exciting of order 8" in checks[
         "order_excitation"] and "of order 6" in checks["order_excitation"]
     assert [w.category for w in said] == [ExcitationWarning]

@@ -167,15 +167,15 @@ def _offsets(data: IOData) -> tuple[IOData, np.ndarray, np.ndarray]:
     return remove_means(data)
 
 
-def _checks(data: IOData) -> tuple[dict[str, Any], bool]:
+def _checks(data: IOData) -> tuple[dict[str, Any], bool, int | None]:
     import sysid
 
     checks: dict[str, Any] = {}
-    feedback = False
+    feedback, counted = False, None
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         try:
-            checks["excitation"] = excitation_check(data)
+            checks["excitation"], counted = excitation_check(data)
         except Exception as e:  # noqa: BLE001 - recorded, not raised
             checks["excitation"] = f"not checked ({e})"
         try:
@@ -202,7 +202,7 @@ def _checks(data: IOData) -> tuple[dict[str, Any], bool]:
         checks["outliers"] = (f"{spikes}: every fit bends to them; repair them first "
                               f"(sysid.despike(data)) or cut them out")
         warnings.warn(f"identify: {checks['outliers']}", SysidWarning, stacklevel=user_stacklevel())
-    return checks, feedback
+    return checks, feedback, counted
 
 
 #: the smallest horizon identify gives a short record when its data matrix can still have
@@ -626,7 +626,7 @@ def identify(
     if steps is not None and not staircase:  # process models fitted from rest, by BIC
         return identify_step_test(data, validation, steps, t0, max_order)
     centred, mu, my = _offsets(data)
-    checks, feedback = _checks(centred)
+    checks, feedback, counted = _checks(centred)
     # six significant digits: rounding to decimals printed data in micro-units as [0.0]
     checks["offsets"] = (f"input means [{', '.join(f'{v:.6g}' for v in mu)}], output means "
                          f"[{', '.join(f'{v:.6g}' for v in my)}] removed (kept with the model)")
@@ -776,7 +776,7 @@ def identify(
     if "identify_refit" in model.info:
         checks["final_refit"] = model.info["identify_refit"]
     refit_cap_check(model, checks)
-    order_excitation_check(int(chosen["order"]), centred, checks)
+    order_excitation_check(int(chosen["order"]), centred, checks, counted)
     trend_check(model, centred, checks)
     persistent_mode_check(model, centred, checks)
     weak_check(float(chosen["held_out_fit"]), checks)

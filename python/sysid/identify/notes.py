@@ -17,10 +17,10 @@ from ..data.iodata import IOData
 from ..models.continuous import ContinuousStateSpace
 from ..validation.crossval import trend_share
 
-__all__ = ["excitation_check", "order_excitation_check", "trend_check", "integrates_within",
-           "persistent_mode_check", "weak_check", "refit_cap_check", "loop_checks",
-           "loop_feedthrough_check", "loop_bias_check", "TREND_SHARE", "TREND_OUTPUT",
-           "PERSISTENT_DECAY", "WEAK_FIT"]
+__all__ = ["excitation_check", "excitation_count", "order_excitation_check", "trend_check",
+           "integrates_within", "persistent_mode_check", "weak_check", "refit_cap_check",
+           "loop_checks", "loop_feedthrough_check", "loop_bias_check", "TREND_SHARE",
+           "TREND_OUTPUT", "PERSISTENT_DECAY", "WEAK_FIT", "EXCITATION_CAP"]
 
 #: a held-out fit below this (in %) explains less than half of the outputs' variation
 #: (``fit = 100 (1 - sqrt(1 - explained))``): ``checks["weak"]`` says so
@@ -34,12 +34,26 @@ TREND_SHARE = 0.2
 TREND_OUTPUT = 0.01
 
 
-def excitation_check(data: IOData) -> str:
+#: the largest persistent-excitation order ``checks["excitation"]`` counts to ("order >= 40")
+EXCITATION_CAP = 40
+
+
+def excitation_count(data: IOData, cols: list[int], cap: int = EXCITATION_CAP) -> int:
+    """The spectral persistent-excitation order (:func:`sysid.persistent_excitation_order`, at
+    most ``cap``) of the inputs ``cols`` of ``data``, its experiments counted separately."""
+    from ..data.input_design import persistent_excitation_order
+
+    us = [e[0][:, cols] for e in data.experiments]
+    return int(persistent_excitation_order(us if len(us) > 1 else us[0], cap))
+
+
+def excitation_check(data: IOData) -> tuple[str, int | None]:
     """``checks["excitation"]``: the order of persistent excitation of the inputs (the
-    spectral count, :func:`sysid.persistent_excitation_order`), and the inputs that change at
-    a few samples only (:func:`sysid.subspace.steptest.stepped_inputs`): a step's spectrum
-    is its edges', so the count speaks for the other inputs only (a pulse beside a ramped
-    input read "order >= 40" for both).
+    spectral count, :func:`excitation_count`), and the inputs that change at a few samples
+    only (:func:`sysid.subspace.steptest.stepped_inputs`): a step's spectrum is its edges',
+    so the count speaks for the other inputs only (a pulse beside a ramped input read "order
+    >= 40" for both). Returned with the count of every input, for
+    :func:`order_excitation_check` (``None`` when some input is stepped).
 
     Examples
     --------
@@ -47,56 +61,57 @@ def excitation_check(data: IOData) -> str:
     >>> from sysid.identify.notes import excitation_check
     >>> u = np.c_[np.random.default_rng(0).standard_normal(300), np.r_[np.zeros(100),
     ...                                                              np.ones(200)]]
-    >>> excitation_check(sysid.IOData(u, np.zeros((300, 1)), 1.0))[:46]
-    'input(s) u1 change only a few times (u1 at sam'
+    >>> text, count = excitation_check(sysid.IOData(u, np.zeros((300, 1)), 1.0))
+    >>> text[:46], count
+    ('input(s) u1 change only a few times (u1 at sam', None)
     """
-    from ..data.input_design import persistent_excitation_order
     from ..subspace.steptest import stepped_inputs
 
-    def order(cols: list[int]) -> str:
-        us = [e[0][:, cols] for e in data.experiments]
-        pe = persistent_excitation_order(us if len(us) > 1 else us[0], 40)
-        return f"{'>= ' if pe == 40 else ''}{pe}"
+    def order(pe: int) -> str:
+        return f"{'>= ' if pe == EXCITATION_CAP else ''}{pe}"
     stepped = stepped_inputs(data)
     rest = [j for j, n in enumerate(data.input_names) if n not in stepped]
     if not stepped:
-        return f"input persistently exciting of order {order(rest)}"
+        pe = excitation_count(data, rest)
+        return f"input persistently exciting of order {order(pe)}", pe
     said = "; ".join(f"{n} at sample(s) {', '.join(map(str, c))}" for n, c in stepped.items())
     return (f"input(s) {', '.join(stepped)} change only a few times ({said}): steps or "
             "pulses, whose responses alone determine their paths"
-            + (f"; the other input(s) persistently exciting of order {order(rest)}"
-               if rest else ""))
+            + (f"; the other input(s) persistently exciting of order "
+               f"{order(excitation_count(data, rest))}" if rest else "")), None
 
 
-def order_excitation_check(order: int, data: IOData, checks: dict[str, Any]) -> None:
+def order_excitation_check(order: int, data: IOData, checks: dict[str, Any],
+                           counted: int | None) -> None:
     """``checks["order_excitation"]`` and an :class:`~sysid.ExcitationWarning` when the chosen
     model's ``order`` needs an input persistently exciting of order ``2 order`` and the
-    input's spectral count (:func:`sysid.persistent_excitation_order`) is less, as every
-    estimator warns of its own fit: between the input's excited frequencies the model's
-    response is then set by the noise, not by the input (a shaker's three tones, order 6,
-    chose order 11: held out 80.9 %, 49.6 % on another test of the same tones). Inputs that
-    change at a few samples only (steps, pulses) are left to their own path.
+    input's spectral count ``counted`` (:func:`excitation_check`'s; counted again only past
+    its cap) is less, as every estimator warns of its own fit: between the input's excited
+    frequencies the model's response is then set by the noise, not by the input (a shaker's
+    three tones, order 6, chose order 11: held out 80.9 %, 49.6 % on another test of the
+    same tones). ``counted=None`` (an input stepped a few times, or no count): no note.
 
     Examples
     --------
     >>> import numpy as np, sysid, warnings
-    >>> from sysid.identify.notes import order_excitation_check
+    >>> from sysid.identify.notes import excitation_check, order_excitation_check
     >>> u = np.sin(0.3 * np.arange(500))          # one sinusoid: order 2
+    >>> d = sysid.IOData(u, u, 1.0)
     >>> checks = {}
     >>> with warnings.catch_warnings():
     ...     warnings.simplefilter("ignore")
-    ...     order_excitation_check(3, sysid.IOData(u, u, 1.0), checks)
+    ...     order_excitation_check(3, d, checks, excitation_check(d)[1])
     >>> checks["order_excitation"][:52]
     'the chosen order 3 needs an input persistently excit'
     """
     from .._checks import user_stacklevel
-    from ..data.input_design import persistent_excitation_order, warn_excitation
-    from ..subspace.steptest import stepped_inputs
+    from ..data.input_design import warn_excitation
 
-    if data.n_inputs == 0 or stepped_inputs(data):
+    if counted is None or data.n_inputs == 0:
         return
-    us = [e[0] for e in data.experiments]
-    got = persistent_excitation_order(us if len(us) > 1 else us[0], 2 * order)
+    got = counted
+    if got == EXCITATION_CAP < 2 * order:  # the count stopped at its cap: count further
+        got = excitation_count(data, list(range(data.n_inputs)), 2 * order)
     if got >= 2 * order:
         return
     checks["order_excitation"] = (
