@@ -135,7 +135,7 @@ def test_dask_cluster_killed_worker_corrupt_record_bag_and_dataframe(tmp_path, m
     (folder / "corrupt.parquet").write_bytes(b"PAR1 this is not parquet")
     with dask.config.set({"distributed.scheduler.allowed-failures": 1}), \
             distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                     dashboard_address=None) as cluster, \
+                                     dashboard_address=":0") as cluster, \
             distributed.Client(cluster) as client:
         assert len(client.scheduler_info()["workers"]) == 2
         res = sysid.identify_many(folder, fit=fit_or_die, inputs=["u"], outputs=["y"],

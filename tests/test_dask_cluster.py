@@ -27,7 +27,7 @@ def test_multiprocess_cluster_gives_the_single_machine_factor() -> None:
         y[t] = 0.6 * y[t - 1] + u[t - 1] @ np.array([[1.0, 0.2], [-0.3, 0.8]])
     y += 0.1 * rng.standard_normal((n, 2))
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                  dashboard_address=None) as cluster, \
+                                  dashboard_address=":0") as cluster, \
             distributed.Client(cluster) as client:
         assert len(client.scheduler_info()["workers"]) == 2
         f = compress_dask(da.from_array(u, chunks=(7_000, 2)), da.from_array(y, chunks=(7_000, 2)),

@@ -230,7 +230,7 @@ def test_dask_on_a_local_cluster_matches_single_machine():
     du = da.from_array(u, chunks=(3_000, 2))
     dy = da.from_array(y, chunks=(3_000, 2))
     with distributed.LocalCluster(
-        n_workers=2, threads_per_worker=1, processes=False, dashboard_address=None
+        n_workers=2, threads_per_worker=1, processes=False, dashboard_address=":0"
     ) as cluster, distributed.Client(cluster):
         f = compress_dask(du, dy, 5)
         f2 = compress_stream((du, dy), 5)
