@@ -196,7 +196,8 @@ def _input_p_values(exps: list[tuple[np.ndarray, np.ndarray]], na: int, nb: int,
     """Per input, the p-value of the F test of its ``nb`` terms in the ARX model of one
     output at the delays ``nk`` (the model without that input nested in it, both fitted on
     the same samples)."""
-    from scipy.stats import f as f_dist
+    from scipy.special import fdtrc  # the F distribution's survival function (no scipy.stats:
+    # its import costs about a second, and identify searches delays on every record)
 
     m = len(nk)
     t0 = max(na, int(max(nk)) + nb - 1)
@@ -230,7 +231,7 @@ def _input_p_values(exps: list[tuple[np.ndarray, np.ndarray]], na: int, nb: int,
             out.append(0.0)
             continue
         F = (low - full) / nb / (full / dof)
-        out.append(float(f_dist.sf(max(F, 0.0), nb, dof)))
+        out.append(float(fdtrc(nb, dof, max(F, 0.0))))
     return out
 
 
@@ -366,7 +367,7 @@ def _first_response(exps: list[tuple[np.ndarray, np.ndarray]], nk_min: int,
     cols = columns(n)
     full, dof, ntest = loss(cols), count - cols.size, nk_max - nk_min + 1
     exact = not full > 1e-13 * zz    # noise-free: only whether the terms are needed at all
-    from scipy.stats import f as f_dist
+    from scipy.special import fdtrc
 
     for j in range(m):
         own = top + j * width + np.arange(nk_max - nk_min + n + 1)
@@ -382,7 +383,7 @@ def _first_response(exps: list[tuple[np.ndarray, np.ndarray]], nk_min: int,
                 hit = low > 1e-9 * zz
             else:
                 F = (low - full) / (k + 1) / (full / dof)
-                hit = float(f_dist.sf(max(F, 0.0), k + 1, dof)) * ntest < 0.01
+                hit = float(fdtrc(k + 1, dof, max(F, 0.0))) * ntest < 0.01
             if hit:
                 out[j] = nk_min + k
                 break
