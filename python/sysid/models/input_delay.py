@@ -36,7 +36,8 @@ from ..data.iodata import IOData
 from ..errors import DataError
 from .statespace import StateSpaceModel
 
-__all__ = ["absorb_delay", "delayed_fit", "input_delays", "nkshift", "shift_inputs"]
+__all__ = ["absorb_delay", "delay_free_view", "delayed_fit", "input_delays", "nkshift",
+           "shift_inputs"]
 
 
 def input_delays(data: IOData, input_delay: Any, feedthrough: Any = None) -> np.ndarray:
@@ -112,6 +113,9 @@ def absorb_delay(model: StateSpaceModel, delays: Any) -> StateSpaceModel:
     n, m, l = model.nstates, model.ninputs, model.noutputs
     if k.size != m:
         raise DataError(f"need one delay per input ({m}), got {k.size}")
+    if np.any(k < 0):
+        raise DataError(f"input delays are samples >= 0, got {k.tolist()}: an input that "
+                        "leads the output is a model with feed-through, not a delay")
     nd = int(k.sum())
     A = np.zeros((n + nd, n + nd))
     B = np.zeros((n + nd, m))
@@ -142,6 +146,37 @@ def absorb_delay(model: StateSpaceModel, delays: Any) -> StateSpaceModel:
     if unc is not None:  # the delay-free model's parameters, through the same map
         out.uncertainty = unc.through(lambda m: absorb_delay(m, k))
     return out
+
+
+def delay_free_view(model: Any, data: IOData) -> tuple[Any, IOData]:
+    """``(model, data)`` as the delay-free model sees them: for a model with absorbed input
+    delays (``info["input_delay"]``) its ``info["delay_free"]`` and the record with each input
+    delayed by its ``k_j`` samples, the first ``k_j`` taken as the input held at its first
+    value (each experiment keeps all its samples); any other model and the record unchanged.
+    The delay-free model simulates that record as the absorbed one does from a delay line
+    holding the first input, at the cost of its own order, not of the delay line's states.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> m = absorb_delay(sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]]), [3])
+    >>> free, d = delay_free_view(m, sysid.IOData(u=np.arange(1.0, 7.0), y=np.ones(6)))
+    >>> free.nstates, d.u.ravel().tolist()
+    (1, [1.0, 1.0, 1.0, 1.0, 2.0, 3.0])
+    """
+    k = (getattr(model, "info", None) or {}).get("input_delay")
+    if k is None:
+        return model, data
+    k = np.asarray(k, dtype=int)
+    us, ys = [], []
+    for u, y in data.experiments:
+        n = u.shape[0]
+        us.append(np.column_stack([np.r_[np.full(min(kj, n), u[0, j]), u[:max(n - kj, 0), j]]
+                                   for j, kj in enumerate(k)]))
+        ys.append(y)
+    return model.info["delay_free"], IOData(
+        u=us if len(us) > 1 else us[0], y=ys if len(ys) > 1 else ys[0], dt=data.dt,
+        input_names=data.input_names, output_names=data.output_names)
 
 
 def nkshift(data: Any, nk: Any) -> IOData:

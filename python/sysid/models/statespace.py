@@ -364,12 +364,28 @@ class StateSpaceModel(ModelMixin):
             first order does not hold, get the Monte Carlo value and an
             ``UncertaintyWarning`` says so.
 
+        A model with absorbed input delays (:func:`sysid.models.input_delay.absorb_delay`)
+        has its delay-free model's poles, then one exact zero per delay state (standard
+        deviation 0: the delay line has no parameters).
+
         Examples
         --------
         >>> import sysid
         >>> sysid.StateSpaceModel([[0.5, 0], [0, -0.2]], [[1], [1]], [[1, 1]]).poles()
         array([ 0.5+0.j, -0.2+0.j])
         """
+        nd = delay_states(self)
+        n = self.nstates - nd
+        if nd and not np.any(self.A[n:, :n]) and not np.any(np.triu(self.A[n:, n:])):
+            # block triangular with a nilpotent delay line: its zeros are exact
+            free = self.info.get("delay_free")
+            zeros = np.zeros(nd, dtype=complex)
+            if not std:
+                return np.r_[np.linalg.eigvals(self.A[:n, :n]).astype(complex), zeros]
+            if (isinstance(free, StateSpaceModel) and free.uncertainty is not None
+                    and np.array_equal(free.A, self.A[:n, :n])):
+                p, sd = free.poles(std=True, method=method)
+                return np.r_[p, zeros], np.r_[sd, zeros]
         if std:
             from .pole_uncertainty import pole_std
 
