@@ -36,6 +36,7 @@ from .._parallel import ordered
 from .._progress import Bar
 from ..data.iodata import IOData
 from ..errors import SysidError
+from ..models.input_delay import delay_free_view
 from ..models.statespace import delay_free_order, ss_parameter_count
 from ..validation.crossval import output_fits, simulation_errors, variation
 from ..validation.ties import (  # the subspace automatic order's rule too
@@ -287,7 +288,10 @@ class Board:
                                                     ) as models:
                 warnings.simplefilter("ignore")
                 for k, ((_, held), model) in enumerate(zip(self.folds, models)):
-                    outs.append(output_fits(model, held, dev=self.weights[k]))
+                    # a model with an input delay: its delay line holds the block's first
+                    # input (not fitted), simulated at the delay-free model's cost
+                    outs.append(output_fits(*delay_free_view(model, held),
+                                            dev=self.weights[k]))
                     fits.append(block_fit(outs[-1]))
                     if start is not None:  # a refinement's fold fits: starts for its re-fit
                         row.setdefault("fold_models", []).append(model)

@@ -35,7 +35,9 @@
    candidates, not starts; not under feedback); when an unstable candidate wins only with the
    record's drift left in, every sweep candidate once more with one output differenced and
    summed back, a pole pinned at 1 (:mod:`.integrating`: an output that integrates, kept
-   only if it beats the stable ones with the drift left in and taken out). A refinement
+   only if it beats the stable ones with the drift left in and taken out); for an input
+   delay past the window's horizon, the sweep and its best refinements on the inputs shifted
+   by it, chosen only if the blocks show it clearly (:mod:`.delay`). A refinement
    scored clearly below its start on the held-out blocks is never chosen; one below it, or
    below the best candidate so far, on most blocks is stopped there. On the held-out blocks
    a refinement's search stops once it has settled
@@ -108,6 +110,7 @@ from ..validation.swept import held_out_design
 from .board import Board, free_poles, informative, unstable
 from .choice import _choose
 from .climb import higher_orders
+from .delay import delay_candidates, detected_delays, keep_if_shown, within_delay
 from .integrating import integrating_candidates, integrating_note
 from .notes import (
     excitation_check,
@@ -398,9 +401,9 @@ def _refine(board: Board, r: dict[str, Any], focus: str, criterion: str) -> None
     def fit(k: int) -> Any:
         part = board.folds[k][0]
         cap = int(FOLD_WORK // iteration_work(part, r["order"], ft, focus == "prediction"))
-        return sysid.pem(part, r["fit_fn"](k), focus=focus, feedthrough=ft,
-                         weighting=wt, max_iter=max(SETTLE_WINDOW + 1, min(50, cap)),
-                         progress=settled(part, wt, board.stopper()))
+        return within_delay(part, r["fit_fn"](k), lambda d, s: sysid.pem(
+            d, s, focus=focus, feedthrough=ft, weighting=wt, progress=settled(
+                d, wt, board.stopper()), max_iter=max(SETTLE_WINDOW + 1, min(50, cap))))
 
     mine: dict[str, Any] = {}  # this refinement's row, once scored
 
@@ -496,14 +499,14 @@ def _final_refit(data: IOData, start: Any, order: int, ft: bool, focus: str,
 
     w = iteration_work(data, order, ft, focus == "prediction")
     if FINAL_ITER * w <= FINAL_WORK:
-        return sysid.pem(data, start, focus=focus, feedthrough=ft, weighting=wt,
-                         max_iter=FINAL_ITER, progress=False)
+        return within_delay(data, start, lambda d, s: sysid.pem(
+            d, s, focus=focus, feedthrough=ft, weighting=wt, max_iter=FINAL_ITER, progress=False))
     cap = max(SETTLE_WINDOW + 1, int(FINAL_WORK // w))
     names = ["its start"] + [f"its fit on fold {k + 1}" for k in range(len(more))]
     fits = [simulation_fit(m, data) for m in [start, *more]]
     best = int(np.argmax(fits)) if np.any(np.isfinite(fits)) else 0
-    m = sysid.pem(data, [start, *more][best], focus=focus, feedthrough=ft, weighting=wt,
-                  max_iter=cap, progress=settled(data, wt))
+    m = within_delay(data, [start, *more][best], lambda d, s: sysid.pem(
+        d, s, focus=focus, feedthrough=ft, weighting=wt, max_iter=cap, progress=settled(d, wt)))
     m.info["identify_refit"] = (
         f"re-fitted on the whole record from {names[best]} (of {len(names)} starts, the one "
         f"that simulates it best) until settled ({m.info['pem']['iterations']} iterations, at "
@@ -687,7 +690,11 @@ def identify(
                     "search from (every one was unstable on some held-out block); the model "
                     "is a subspace one")
         states_candidates(board)  # after the refinements: candidates, not starts
-        integrating_candidates(board, h, SUBSPACE)  # an output that integrates: the last
+        integrating_candidates(board, h, SUBSPACE)  # an output that integrates
+        if not feedback and (shift := detected_delays(centred, shortest, h)) is not None:
+            checks["input_delay"] = delay_candidates(board, centred, shift, h, SUBSPACE,
+                                                     max_order, _refine if refine else None)
+            checks["input_delay"] += "; " + keep_if_shown(board)
     if feedback and refine and board.starts_only(
             SUBSPACE, "open-loop subspace fit under feedback (biased): a start, not chosen"):
         checks["feedback"] += ("; the open-loop subspace fits (n4sid, moesp, cva), biased "
@@ -782,7 +789,8 @@ def identify(
     weak_check(float(chosen["held_out_fit"]), checks)
     loop_checks(chosen, feedback, checks)
     if getattr(model, "uncertainty", None) is None:
-        model = with_uncertainty(model, centred, checks, SUBSPACE + CLOSED_LOOP)
+        model = within_delay(centred, model, lambda d, m: with_uncertainty(
+            m, d, checks, SUBSPACE + CLOSED_LOOP))
     result_model = IdentifiedModel(model, mu, my)
     if validation is not None and (note := coverage_note(data, validation)) is not None:
         checks["validation"] = note

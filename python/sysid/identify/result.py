@@ -25,10 +25,12 @@ SUMMARY_ROWS = 30
 
 def _family(row: dict[str, Any]) -> str:
     """The leaderboard's family column: a subspace candidate with a stable ``A`` enforced is
-    told apart from the same weighting's plain one."""
-    return row["family"] + {"subspace, stable A": " (stable A)",
-                            "subspace, states": " (states)",
-                            "subspace, integrating": " (integrating)"}.get(row.get("criterion"), "")
+    told apart from the same weighting's plain one, a candidate with input delays
+    (:mod:`.delay`) from one without."""
+    delay = row.get("input_delay")
+    kind = {"subspace, stable A": " (stable A)", "subspace, states": " (states)",
+            "subspace, integrating": " (integrating)"}.get(row.get("criterion"), "")
+    return row["family"] + kind + (f" (delay {', '.join(map(str, delay))})" if delay else "")
 
 
 def reported_fit(model: IdentifiedModel, validation: IOData | None) -> float | None:
@@ -274,10 +276,14 @@ class IdentifyResult(HTMLResult):
     def to_pandas(self) -> Any:
         """The leaderboard as a DataFrame, in the order of :meth:`summary`: the stable
         candidates the held-out blocks cannot tell apart from the best first, smallest order
-        first; then the other stable ones by held-out fit; the unstable ones last."""
+        first; then the other stable ones by held-out fit; the unstable ones last. A column
+        ``input_delay`` (samples per input; None for the others) when candidates with input
+        delays were scored."""
         import pandas as pd
 
-        return pd.DataFrame(self.leaderboard, columns=list(COLUMNS))
+        delays = any("input_delay" in r for r in self.leaderboard)
+        return pd.DataFrame(self.leaderboard,
+                            columns=list(COLUMNS) + (["input_delay"] if delays else []))
 
     def summary(self, rows: int | None = SUMMARY_ROWS) -> str:
         """The choice, the checks and the leaderboard as text.
