@@ -141,6 +141,10 @@ findings: results/realdata_fresh20.md.
 twenty-first sweep's records (an air pump pressurising a leaky vessel, one run split 2/3 /
 1/3; a cyclist's heart rate against an ergometer's power, validated on a second ride);
 sources, SHA-256, how each ``.npz`` is made and the findings: results/realdata_fresh21.md.
+``--fresh22-records DIR`` (``FRESH22``, results/realdata_fresh22_table[_<split>].md): the
+twenty-second sweep's records (a small thermal plant and a DC motor run over the internet,
+each one run split 2/3 / 1/3; a heat pump in climate chambers, validated on another city's
+day); sources, SHA-256, how each ``.npz`` is made and the findings: results/realdata_fresh22.md.
 
 Score: the simulation fit on the validation part, NRMSE %, ``100 (1 - |y - yhat| / |y -
 mean(y)|)`` averaged over outputs, with the initial state fitted by least squares on the
@@ -200,6 +204,7 @@ from realdata_records import (  # noqa: F401
     FRESH19,
     FRESH20,
     FRESH21,
+    FRESH22,
     MORE,
     SWEEPS,
 )

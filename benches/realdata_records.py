@@ -243,6 +243,19 @@ FRESH21 = {
     "ergometer_hr": ("ergometer_hr", "ergometer_hr_val"),
 }
 
+FRESH22 = {
+    # a small thermal plant run over the internet (UNThermal), 1 s: a PRBS on the heater ->
+    # the temperature (one run: first 2/3 / last 1/3)
+    "unthermal_prbs": ("unthermal_prbs", None),
+    # a small DC motor on the same platform, 20 ms: a PRBS on the voltage -> the speed
+    # (one run: first 2/3 / last 1/3)
+    "undcmotor_prbs": ("undcmotor_prbs", None),
+    # a two-stage heat pump in hardware-in-the-loop climate chambers (NIST), 60 s:
+    # thermostat's stage command, outdoor and indoor air temperatures -> supply-air
+    # temperature, outdoor-unit power (Tucson's day; Atlanta's validates)
+    "ashp_hil_stage": ("ashp_hil_stage", "ashp_hil_stage_val"),
+}
+
 #: the sweeps read from ``DIR/<name>.npz``: ``--<sweep>-records DIR`` runs a table's records
 #: into ``results/<stem>[_<split>].md`` (the third sweep's tables beside its account,
 #: results/realdata_fresh3.md)
@@ -265,4 +278,5 @@ SWEEPS = {"more": ("MORE", "realdata_more"), "fresh": ("FRESH", "realdata_fresh"
           "fresh18": ("FRESH18", "realdata_fresh18_table"),
           "fresh19": ("FRESH19", "realdata_fresh19_table"),
           "fresh20": ("FRESH20", "realdata_fresh20_table"),
-          "fresh21": ("FRESH21", "realdata_fresh21_table")}
+          "fresh21": ("FRESH21", "realdata_fresh21_table"),
+          "fresh22": ("FRESH22", "realdata_fresh22_table")}
