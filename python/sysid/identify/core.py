@@ -692,8 +692,8 @@ def identify(
         states_candidates(board)  # after the refinements: candidates, not starts
         integrating_candidates(board, h, SUBSPACE)  # an output that integrates
         if not feedback and (shift := detected_delays(centred, shortest, h)) is not None:
-            checks["input_delay"] = delay_candidates(board, centred, shift, h, SUBSPACE,
-                                                     max_order, _refine if refine else None)
+            checks["input_delay"] = delay_candidates(board, shift, h, SUBSPACE, max_order,
+                                                     _refine if refine else None)
             checks["input_delay"] += "; " + keep_if_shown(board)
     if feedback and refine and board.starts_only(
             SUBSPACE, "open-loop subspace fit under feedback (biased): a start, not chosen"):

@@ -31,11 +31,11 @@ from typing import Any
 import numpy as np
 
 from ..data.iodata import IOData
-from ..data.segments import long_enough
-from ..errors import DataError, ExcitationError, InsufficientDataError
+from ..errors import DataError, ExcitationError, InsufficientDataError, SysidError
 from ..models.input_delay import absorb_delay, shift_inputs
-from ..validation.crossval import MAX_ORDER, fold_horizon, tie
+from ..validation.crossval import MAX_ORDER, tie
 from .board import Board
+from .sweep import transformed_sweep
 
 __all__ = ["delay_candidates", "detected_delays", "keep_if_shown", "within_delay"]
 
@@ -124,52 +124,21 @@ def within_delay(data: IOData, model: Any, fit: Callable[[IOData, Any], Any]) ->
     return absorb_delay(fit(shift_inputs(data, k), model.info["delay_free"]), k)
 
 
-def delay_candidates(board: Board, full: IOData, shift: np.ndarray, h_full: int,
+def delay_candidates(board: Board, shift: np.ndarray, h_full: int,
                      methods: tuple[str, ...], max_order: int | None,
                      refine: Callable[[Board, dict[str, Any], str, str], None] | None) -> str:
     """The subspace candidates (every weighting in ``methods``, with and without
     feed-through, orders up to what every shifted part's window allows) fitted to the
     record with its inputs shifted by ``shift``, the delays absorbed, scored on the board's
-    blocks; the best ``N_DELAYED_REFINE`` orders refined by ``refine`` (None: not refined).
-    Returns what was done, for ``checks["input_delay"]``."""
-    from ..subspace.estimator import SubspaceEstimator
-
-    ests = []
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        for part, _ in board.folds:
-            shifted = shift_inputs(part, shift)
-            h = fold_horizon(h_full, shifted)
-            fitted = long_enough(shifted, 2 * h)
-            try:
-                if fitted is None:
-                    raise InsufficientDataError("no experiment long enough for the window")
-                ests.append(SubspaceEstimator(fitted, h))
-            except (InsufficientDataError, ExcitationError, DataError) as e:
-                return f"not fitted: a part shifted by the delays cannot be ({e})"[:200]
-    top = min(min(e.max_order for e in ests), max_order or MAX_ORDER)
-    whole: list[Any] = [None, None]
-
-    def estimator(data: IOData) -> Any:
-        if whole[0] is not data:
-            shifted = shift_inputs(data, shift)
-            whole[:] = [data, SubspaceEstimator(long_enough(shifted, 2 * h_full) or shifted,
-                                                h_full)]
-        return whole[1]
-
-    rows = []
-    for meth in methods:
-        for ft in (False, True):
-            for n in range(1, top + 1):
-                row = board.add(
-                    meth, n, ft, None, "subspace, input delay",
-                    lambda k, m=meth, n=n, ft=ft: absorb_delay(
-                        ests[k].fit(n, method=m, feedthrough=ft, kalman=False), shift),
-                    lambda data, m=meth, n=n, ft=ft: absorb_delay(
-                        estimator(data).fit(n, method=m, feedthrough=ft), shift),
-                    budgeted=False)
-                if row is not None:
-                    rows.append(row)
+    blocks (:func:`.sweep.transformed_sweep`); the best ``N_DELAYED_REFINE`` orders refined
+    by ``refine`` (None: not refined). Returns what was done, for ``checks["input_delay"]``."""
+    try:
+        rows, top = transformed_sweep(board, lambda d: shift_inputs(d, shift),
+                                      lambda m: absorb_delay(m, shift), h_full, methods,
+                                      max_order or MAX_ORDER, "subspace, input delay",
+                                      refit_kalman=True)
+    except (SysidError, ValueError, np.linalg.LinAlgError) as e:
+        return f"not fitted: a part shifted by the delays cannot be ({e})"[:200]
     starts: dict[int, dict[str, Any]] = {}
     for r in sorted((r for r in rows if board.eligible(r)), key=lambda r: -r["held_out_fit"]):
         if r["order"] not in starts and len(starts) < N_DELAYED_REFINE:

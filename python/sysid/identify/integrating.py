@@ -14,17 +14,15 @@ Here the integrator is a family of its own, with the data asked whether they pre
 
 from __future__ import annotations
 
-import warnings
 from typing import Any
 
 import numpy as np
 
 from ..data.iodata import IOData
-from ..data.segments import long_enough
 from ..errors import SysidError
 from ..models.statespace import StateSpaceModel
-from ..validation.crossval import fold_horizon
 from .board import Board, free_poles
+from .sweep import transformed_sweep
 
 __all__ = ["MAX_OUTPUTS", "differenced", "integrated", "integrating_candidates",
            "integrating_note"]
@@ -102,36 +100,14 @@ def integrated(model: Any, outputs: list[int]) -> StateSpaceModel:
 
 def _sweep(board: Board, horizon: int, methods: tuple[str, ...], top: int,
            outputs: list[int]) -> None:
-    from ..subspace.estimator import SubspaceEstimator
-
-    ests = []
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        for part, _ in board.folds:
-            h = fold_horizon(horizon, part)
-            d = differenced(part, outputs)
-            try:
-                ests.append(SubspaceEstimator(long_enough(d, 2 * h) or d, h))
-            except (SysidError, ValueError, np.linalg.LinAlgError):
-                return  # a fitted part that cannot be differenced and fitted: no such family
-    whole: list[Any] = [None, None]
-
-    def refit(data: IOData, meth: str, n: int, ft: bool) -> Any:
-        if whole[0] is not data:
-            d = differenced(data, outputs)
-            whole[:] = [data, SubspaceEstimator(long_enough(d, 2 * horizon) or d, horizon)]
-        return integrated(whole[1].fit(n, method=meth, feedthrough=ft, kalman=False), outputs)
-
-    for meth in methods:
-        for ft in (False, True):
-            for n in range(1, min(top, *(e.max_order for e in ests)) + 1):
-                row = board.add(meth, n + len(outputs), ft, None, CRITERION,
-                                lambda k, m=meth, n=n, ft=ft: integrated(ests[k].fit(
-                                    n, method=m, feedthrough=ft, kalman=False), outputs),
-                                lambda data, m=meth, n=n, ft=ft: refit(data, m, n, ft),
-                                budgeted=False)
-                if row is not None:
-                    row["integrating"] = list(outputs)
+    try:
+        rows, _ = transformed_sweep(board, lambda d: differenced(d, outputs),
+                                    lambda m: integrated(m, outputs), horizon, methods, top,
+                                    CRITERION, extra_order=len(outputs))
+    except (SysidError, ValueError, np.linalg.LinAlgError):
+        return  # a fitted part that cannot be differenced and fitted: no such family
+    for row in rows:
+        row["integrating"] = list(outputs)
 
 
 def integrating_candidates(board: Board, horizon: int, methods: tuple[str, ...]) -> None:
