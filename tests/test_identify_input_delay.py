@@ -4,6 +4,8 @@ import warnings
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import sysid
 from sysid.identify.board import Board
@@ -116,6 +118,36 @@ def test_the_delay_free_view_simulates_as_the_absorbed_model_from_a_held_delay_l
     # a model without a delay and its record pass through unchanged
     data = sysid.IOData(u=u, y=np.zeros((200, 2)))
     assert delay_free_view(free, data) == (free, data)
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**31), n=st.integers(1, 4), m=st.integers(1, 3),
+       l=st.integers(1, 2), delays=st.lists(st.integers(0, 6), min_size=3, max_size=3),
+       pieces=st.integers(1, 2))
+def test_any_delays_the_view_and_the_absorbed_model_simulate_alike(seed, n, m, l, delays,
+                                                                   pieces):
+    # every input's delay line holding its first value, in each experiment of the record
+    rng = np.random.default_rng(seed)
+    A = rng.standard_normal((n, n))
+    A *= 0.9 / max(1.0, float(np.max(np.abs(np.linalg.eigvals(A)))))
+    free = sysid.StateSpaceModel(A, rng.standard_normal((n, m)), rng.standard_normal((l, n)),
+                                 rng.standard_normal((l, m)))
+    k = delays[:m]
+    absorbed = absorb_delay(free, k)
+    us = [rng.standard_normal((40 + 7 * i, m)) for i in range(pieces)]
+    data = sysid.IOData(u=us if pieces > 1 else us[0],
+                        y=[np.zeros((len(u), l)) for u in us] if pieces > 1 else
+                        np.zeros((40, l)))
+    f, view = delay_free_view(absorbed, data)
+    assert f is free and view.lengths == data.lengths
+    for u, (v, _) in zip(us, view.experiments):
+        x0 = np.zeros(absorbed.nstates)
+        o = n
+        for j, kj in enumerate(k):
+            x0[o:o + kj] = u[0, j]
+            o += kj
+        np.testing.assert_allclose(free.simulate(v), absorbed.simulate(u, x0=x0),
+                                   atol=1e-10, rtol=1e-10)
 
 
 def test_a_search_from_a_delayed_model_moves_the_model_not_its_delay_line():
