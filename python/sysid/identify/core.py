@@ -36,18 +36,17 @@
    record's drift left in, every sweep candidate once more with one output differenced and
    summed back, a pole pinned at 1 (:mod:`.integrating`: an output that integrates, kept
    only if it beats the stable ones with the drift left in and taken out); for an input
-   delay past the window's horizon, the sweep and its best refinements on the inputs shifted
-   by it, chosen only if the blocks show it clearly (:mod:`.delay`). A refinement
-   scored clearly below its start on the held-out blocks is never chosen; one below it, or
-   below the best candidate so far, on most blocks is stopped there. On the held-out blocks
-   a refinement's search stops once it has settled
-   (:func:`settled`: its last iterations raised the fit its criterion implies by less than a
-   tenth of what the blocks resolve); re-fitted on the whole record it runs to convergence
-   (up to ``FINAL_ITER`` iterations: a search can crawl along a plateau and then drop) when
-   that is cheap. On long records the refinements' work is bounded (``FINAL_WORK``,
-   ``FOLD_WORK``, ``REFINE_WORK``; :func:`iteration_work`): the whole-record re-fit stops
-   once settled, the fold fits are capped, later refinements are not scored (the checks say
-   so).
+   delay past the window's horizon, the sweep (closed-loop weightings under feedback) and its
+   best refinements on the inputs shifted by it, chosen if the blocks show it (:mod:`.delay`).
+   A refinement scored clearly below its start on the held-out blocks is never chosen; one
+   below it, or below the best candidate so far, on most blocks is stopped there. On the
+   held-out blocks a refinement's search stops once it has settled (:func:`settled`: its last
+   iterations raised the fit its criterion implies by less than a tenth of what the blocks
+   resolve); re-fitted on the whole record it runs to convergence (up to ``FINAL_ITER``
+   iterations: a search can crawl along a plateau and then drop) when that is cheap. On long
+   records the refinements' work is bounded (``FINAL_WORK``, ``FOLD_WORK``, ``REFINE_WORK``;
+   :func:`iteration_work`): the whole-record re-fit stops once settled, the fold fits are
+   capped, later refinements are not scored (the checks say so).
 4. The held-out blocks rank the candidates but cannot tell apart those within half a fit
    point of the best (5 % of its error at most), nor any within ``RESOLUTION`` (0.1 point)
    of 100 % (:func:`.board.tie`), nor, for the final choice, those with no
@@ -80,6 +79,7 @@ from .._display import modulus, pvalue, unstable_modes
 from .._progress import Bar, show
 from .._threads import one_blas_thread
 from ..data.iodata import IOData
+from ..data.offsets import remove_means
 from ..data.preprocessing import spike_report
 from ..data.segments import long_enough
 from ..errors import (
@@ -162,12 +162,6 @@ FOLD_WORK = FINAL_WORK / 5
 #: refinements' total within ``REFINE_WORK``; the first is always scored
 REFINE_WORK = 5e10
 NOMINAL_ITER = 20
-
-
-def _offsets(data: IOData) -> tuple[IOData, np.ndarray, np.ndarray]:
-    from ..data.offsets import remove_means
-
-    return remove_means(data)
 
 
 def _checks(data: IOData) -> tuple[dict[str, Any], bool, int | None]:
@@ -628,7 +622,7 @@ def identify(
     validation = validation_record(validation, data)  # before the search, not after it
     if steps is not None and not staircase:  # process models fitted from rest, by BIC
         return identify_step_test(data, validation, steps, t0, max_order)
-    centred, mu, my = _offsets(data)
+    centred, mu, my = remove_means(data)
     checks, feedback, counted = _checks(centred)
     # six significant digits: rounding to decimals printed data in micro-units as [0.0]
     checks["offsets"] = (f"input means [{', '.join(f'{v:.6g}' for v in mu)}], output means "
@@ -691,10 +685,10 @@ def identify(
                     "is a subspace one")
         states_candidates(board)  # after the refinements: candidates, not starts
         integrating_candidates(board, h, SUBSPACE)  # an output that integrates
-        if not feedback and (shift := detected_delays(centred, shortest, h)) is not None:
-            checks["input_delay"] = delay_candidates(board, shift, h, SUBSPACE, max_order,
+        if (shift := detected_delays(centred, shortest, h)) is not None:  # closed-loop
+            fam = CLOSED_LOOP if feedback else SUBSPACE  # weightings only under feedback
+            checks["input_delay"] = delay_candidates(board, shift, h, fam, max_order,
                                                      _refine if refine else None)
-            checks["input_delay"] += "; " + keep_if_shown(board)
     if feedback and refine and board.starts_only(
             SUBSPACE, "open-loop subspace fit under feedback (biased): a start, not chosen"):
         checks["feedback"] += ("; the open-loop subspace fits (n4sid, moesp, cva), biased "
@@ -709,6 +703,8 @@ def identify(
                f"clearly below" if a is not None
                else "without them no stable candidate is left (the others are unstable on some "
                     "held-out block, below their start or not scored)"))
+    if shift is not None:  # (once the biased fits are set aside)
+        checks["input_delay"] += "; " + keep_if_shown(board)
     broken = board.broken()
     if broken:
         r = broken[0]

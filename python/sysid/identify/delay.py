@@ -6,7 +6,8 @@ window's horizon bounds how far back it looks: a wave probe 26 m down a basin, w
 flap acts after about 80 samples, is fitted at orders the window cannot give. So when
 :func:`sysid.polynomial.delayest.delays` finds, for some input, a delay to every output it
 determines that reaches past the horizon (:func:`detected_delays`; shorter ones are the
-sweep's to absorb), the subspace candidates are fitted once more to the record with each
+sweep's to absorb), the subspace candidates (under feedback the closed-loop weightings
+only, as the open-loop ones are biased there) are fitted once more to the record with each
 input shifted by its delay less one (the one sample a model without feed-through already
 has; as ``input_delay="auto"`` does), the delays returned as states
 (:func:`~sysid.models.input_delay.absorb_delay`, no parameters), and the best of them are
