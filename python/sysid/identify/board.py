@@ -196,6 +196,24 @@ def unstable(model: Any) -> bool:
     return bool(np.any(np.abs(free_poles(model)) >= 1.0))
 
 
+def block_fits(model: Any, held: IOData, **kw: Any) -> np.ndarray:
+    """:func:`~sysid.validation.crossval.output_fits` of ``model`` on a held-out block; a
+    model with absorbed input delays as its delay-free model sees the block
+    (:func:`~sysid.models.input_delay.delay_free_view`: its delay lines hold the block's first
+    input, not fitted), simulated at the delay-free order's cost, not the delay lines'.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.models.input_delay import absorb_delay
+    >>> m = absorb_delay(sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]]), [30])
+    >>> u = np.random.default_rng(0).standard_normal(300)
+    >>> bool(block_fits(m, sysid.IOData(u=u, y=m.simulate(u)))[0] < 100)  # held at u[0]
+    True
+    """
+    return output_fits(*delay_free_view(model, held), **kw)
+
+
 class Board:
     """Candidates with their held-out scores and a way to re-fit each on the whole record."""
 
@@ -288,10 +306,7 @@ class Board:
                                                     ) as models:
                 warnings.simplefilter("ignore")
                 for k, ((_, held), model) in enumerate(zip(self.folds, models)):
-                    # a model with an input delay: its delay line holds the block's first
-                    # input (not fitted), simulated at the delay-free model's cost
-                    outs.append(output_fits(*delay_free_view(model, held),
-                                            dev=self.weights[k]))
+                    outs.append(block_fits(model, held, dev=self.weights[k]))
                     fits.append(block_fit(outs[-1]))
                     if start is not None:  # a refinement's fold fits: starts for its re-fit
                         row.setdefault("fold_models", []).append(model)
@@ -631,7 +646,7 @@ class Board:
                     with warnings.catch_warnings():
                         warnings.simplefilter("ignore")
                         model = r["refit"](part) if detrended else r["fit_fn"](k)
-                    fits[i].append(output_fits(model, held, trend=True))
+                    fits[i].append(block_fits(model, held, trend=True))
                 except KeyboardInterrupt:
                     raise
                 except Exception:  # noqa: BLE001 - a fit that fails now scores -inf

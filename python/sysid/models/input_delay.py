@@ -91,14 +91,34 @@ def delayed_fit(data: IOData, input_delay: Any, feedthrough: Any,
     return absorb_delay(fit(shift_inputs(data, k)), k)
 
 
-def shift_inputs(data: IOData, delays: np.ndarray) -> IOData:
+def shift_inputs(data: IOData, delays: np.ndarray, hold: bool = False) -> IOData:
     """Each input ``j`` delayed by ``delays[j]`` samples (advanced when negative), the
-    samples whose shifted inputs were not recorded dropped from every experiment."""
-    top = max(0, int(np.max(delays, initial=0)))
+    samples whose shifted inputs were not recorded dropped from every experiment; with
+    ``hold`` (delays ``>= 0``), every sample kept, each input held at its first value before
+    the experiment (what a delay line holding that value feeds).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> d = sysid.IOData(u=np.arange(1.0, 7.0), y=np.zeros(6))
+    >>> shift_inputs(d, [2]).u.ravel().tolist()
+    [1.0, 2.0, 3.0, 4.0]
+    >>> shift_inputs(d, [2], hold=True).u.ravel().tolist()
+    [1.0, 1.0, 1.0, 2.0, 3.0, 4.0]
+    """
+    delays = np.asarray(delays, dtype=int)
+    if hold and np.any(delays < 0):
+        raise DataError(f"holding the first input needs delays >= 0, got {delays.tolist()}")
+    top = 0 if hold else max(0, int(np.max(delays, initial=0)))
     bottom = max(0, -int(np.min(delays, initial=0)))
     us, ys = [], []
     for u, y in data.experiments:
         n = u.shape[0]
+        if hold:
+            us.append(np.column_stack([np.r_[np.full(min(k, n), u[0, j]), u[:n - min(k, n), j]]
+                                       for j, k in enumerate(delays)]) if u.shape[1] else u)
+            ys.append(y)
+            continue
         us.append(np.column_stack([u[top - k:n - bottom - k, j] for j, k in enumerate(delays)])
                   if u.shape[1] else u[top:n - bottom])
         ys.append(y[top:n - bottom])
@@ -151,10 +171,10 @@ def absorb_delay(model: StateSpaceModel, delays: Any) -> StateSpaceModel:
 def delay_free_view(model: Any, data: IOData) -> tuple[Any, IOData]:
     """``(model, data)`` as the delay-free model sees them: for a model with absorbed input
     delays (``info["input_delay"]``) its ``info["delay_free"]`` and the record with each input
-    delayed by its ``k_j`` samples, the first ``k_j`` taken as the input held at its first
-    value (each experiment keeps all its samples); any other model and the record unchanged.
-    The delay-free model simulates that record as the absorbed one does from a delay line
-    holding the first input, at the cost of its own order, not of the delay line's states.
+    delayed, held at its first value before each experiment (:func:`shift_inputs` with
+    ``hold``); any other model and the record unchanged. The delay-free model simulates that
+    record as the absorbed one does from a delay line holding the first input, at the cost
+    of its own order, not of the delay line's states.
 
     Examples
     --------
@@ -167,16 +187,7 @@ def delay_free_view(model: Any, data: IOData) -> tuple[Any, IOData]:
     k = (getattr(model, "info", None) or {}).get("input_delay")
     if k is None:
         return model, data
-    k = np.asarray(k, dtype=int)
-    us, ys = [], []
-    for u, y in data.experiments:
-        n = u.shape[0]
-        us.append(np.column_stack([np.r_[np.full(min(kj, n), u[0, j]), u[:max(n - kj, 0), j]]
-                                   for j, kj in enumerate(k)]))
-        ys.append(y)
-    return model.info["delay_free"], IOData(
-        u=us if len(us) > 1 else us[0], y=ys if len(ys) > 1 else ys[0], dt=data.dt,
-        input_names=data.input_names, output_names=data.output_names)
+    return model.info["delay_free"], shift_inputs(data, np.asarray(k, dtype=int), hold=True)
 
 
 def nkshift(data: Any, nk: Any) -> IOData:
