@@ -38,7 +38,7 @@ from ..data.iodata import IOData
 from ..errors import SysidError
 from ..models.input_delay import delay_free_view
 from ..models.statespace import delay_free_order, ss_parameter_count
-from ..validation.crossval import output_fits, simulation_errors, variation
+from ..validation.crossval import output_fits, preceding_inputs, simulation_errors, variation
 from ..validation.ties import (  # the subspace automatic order's rule too
     RESOLUTION,
     slack,
@@ -196,22 +196,32 @@ def unstable(model: Any) -> bool:
     return bool(np.any(np.abs(free_poles(model)) >= 1.0))
 
 
-def block_fits(model: Any, held: IOData, **kw: Any) -> np.ndarray:
+def block_fits(model: Any, held: IOData, whole: IOData | None = None, **kw: Any
+               ) -> np.ndarray:
     """:func:`~sysid.validation.crossval.output_fits` of ``model`` on a held-out block; a
     model with absorbed input delays as its delay-free model sees the block
-    (:func:`~sysid.models.input_delay.delay_free_view`: its delay lines hold the block's first
-    input, not fitted), simulated at the delay-free order's cost, not the delay lines'.
+    (:func:`~sysid.models.input_delay.delay_free_view`), simulated at the delay-free order's
+    cost, not the delay lines'. Its delay lines hold the inputs recorded before the block in
+    ``whole``, the record it was cut from
+    (:func:`~sysid.validation.crossval.preceding_inputs`), not fitted; without ``whole``,
+    the block's first input.
 
     Examples
     --------
     >>> import numpy as np, sysid
     >>> from sysid.models.input_delay import absorb_delay
     >>> m = absorb_delay(sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]]), [30])
-    >>> u = np.random.default_rng(0).standard_normal(300)
-    >>> bool(block_fits(m, sysid.IOData(u=u, y=m.simulate(u)))[0] < 100)  # held at u[0]
-    True
+    >>> u = np.random.default_rng(0).standard_normal(600)
+    >>> d = sysid.IOData(u=u, y=m.simulate(u))
+    >>> held = sysid.IOData(u=d.u[300:], y=d.y[300:])  # a block cut from d
+    >>> bool(block_fits(m, held)[0] < 99), bool(block_fits(m, held, whole=d)[0] > 99.9)
+    (True, True)
     """
-    return output_fits(*delay_free_view(model, held), **kw)
+    delays = (getattr(model, "info", None) or {}).get("input_delay")
+    before = None
+    if delays is not None and whole is not None:
+        before = preceding_inputs(whole, held, int(np.max(delays, initial=0)))
+    return output_fits(*delay_free_view(model, held, before), **kw)
 
 
 class Board:
@@ -306,7 +316,7 @@ class Board:
                                                     ) as models:
                 warnings.simplefilter("ignore")
                 for k, ((_, held), model) in enumerate(zip(self.folds, models)):
-                    outs.append(block_fits(model, held, dev=self.weights[k]))
+                    outs.append(block_fits(model, held, self.whole, dev=self.weights[k]))
                     fits.append(block_fit(outs[-1]))
                     if start is not None:  # a refinement's fold fits: starts for its re-fit
                         row.setdefault("fold_models", []).append(model)
@@ -646,7 +656,7 @@ class Board:
                     with warnings.catch_warnings():
                         warnings.simplefilter("ignore")
                         model = r["refit"](part) if detrended else r["fit_fn"](k)
-                    fits[i].append(block_fits(model, held, trend=True))
+                    fits[i].append(block_fits(model, held, self.whole, trend=True))
                 except KeyboardInterrupt:
                     raise
                 except Exception:  # noqa: BLE001 - a fit that fails now scores -inf

@@ -13,8 +13,10 @@ has; as ``input_delay="auto"`` does), the delays returned as states
 (:func:`~sysid.models.input_delay.absorb_delay`, no parameters), and the best of them are
 refined on the simulation error as the others are (:func:`within_delay`: the search moves
 the delay-free model). All are scored on the same held-out blocks as every other candidate,
-their delay line holding the block's first input
-(:func:`~sysid.models.input_delay.delay_free_view`).
+their delay line holding the inputs recorded before the block
+(:func:`~sysid.models.input_delay.delay_free_view`,
+:func:`~sysid.validation.crossval.preceding_inputs`; the block's first input held where the
+record has none).
 
 The delay is itself taken from the record (the first significant lag of a search over many),
 so a delayed candidate is kept only when the blocks show it clearly: its best must beat the

@@ -26,7 +26,7 @@ Examples
 from __future__ import annotations
 
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
@@ -91,11 +91,13 @@ def delayed_fit(data: IOData, input_delay: Any, feedthrough: Any,
     return absorb_delay(fit(shift_inputs(data, k)), k)
 
 
-def shift_inputs(data: IOData, delays: np.ndarray, hold: bool = False) -> IOData:
+def shift_inputs(data: IOData, delays: np.ndarray, hold: bool = False,
+                 before: Sequence[np.ndarray] | None = None) -> IOData:
     """Each input ``j`` delayed by ``delays[j]`` samples (advanced when negative), the
     samples whose shifted inputs were not recorded dropped from every experiment; with
-    ``hold`` (delays ``>= 0``), every sample kept, each input held at its first value before
-    the experiment (what a delay line holding that value feeds).
+    ``hold`` (delays ``>= 0``), every sample kept, the inputs before each experiment taken
+    from ``before`` (per experiment, the rows recorded before it, latest last), and held at
+    the earliest value known before that (what a delay line holding those values feeds).
 
     Examples
     --------
@@ -105,6 +107,8 @@ def shift_inputs(data: IOData, delays: np.ndarray, hold: bool = False) -> IOData
     [1.0, 2.0, 3.0, 4.0]
     >>> shift_inputs(d, [2], hold=True).u.ravel().tolist()
     [1.0, 1.0, 1.0, 2.0, 3.0, 4.0]
+    >>> shift_inputs(d, [3], hold=True, before=[np.array([[-2.0], [-1.0]])]).u.ravel().tolist()
+    [-2.0, -2.0, -1.0, 1.0, 2.0, 3.0]
     """
     delays = np.asarray(delays, dtype=int)
     if hold and np.any(delays < 0):
@@ -112,11 +116,16 @@ def shift_inputs(data: IOData, delays: np.ndarray, hold: bool = False) -> IOData
     top = 0 if hold else max(0, int(np.max(delays, initial=0)))
     bottom = max(0, -int(np.min(delays, initial=0)))
     us, ys = [], []
-    for u, y in data.experiments:
+    for i, (u, y) in enumerate(data.experiments):
         n = u.shape[0]
         if hold:
-            us.append(np.column_stack([np.r_[np.full(min(k, n), u[0, j]), u[:n - min(k, n), j]]
-                                       for j, k in enumerate(delays)]) if u.shape[1] else u)
+            past = u[:0] if before is None else np.asarray(before[i]).reshape(-1, u.shape[1])
+            line = np.vstack([past, u])  # the inputs known, from the earliest
+            p = past.shape[0]
+            us.append(np.column_stack([
+                np.r_[np.full(min(n, max(0, k - p)), line[0, j]),
+                      line[max(0, p - k):max(0, p - k, p + n - k), j]]
+                for j, k in enumerate(delays)]) if u.shape[1] else u)
             ys.append(y)
             continue
         us.append(np.column_stack([u[top - k:n - bottom - k, j] for j, k in enumerate(delays)])
@@ -168,13 +177,15 @@ def absorb_delay(model: StateSpaceModel, delays: Any) -> StateSpaceModel:
     return out
 
 
-def delay_free_view(model: Any, data: IOData) -> tuple[Any, IOData]:
+def delay_free_view(model: Any, data: IOData, before: Sequence[np.ndarray] | None = None
+                    ) -> tuple[Any, IOData]:
     """``(model, data)`` as the delay-free model sees them: for a model with absorbed input
     delays (``info["input_delay"]``) its ``info["delay_free"]`` and the record with each input
-    delayed, held at its first value before each experiment (:func:`shift_inputs` with
-    ``hold``); any other model and the record unchanged. The delay-free model simulates that
-    record as the absorbed one does from a delay line holding the first input, at the cost
-    of its own order, not of the delay line's states.
+    delayed (:func:`shift_inputs` with ``hold``): before each experiment, the inputs recorded
+    before it when ``before`` gives them (per experiment, latest last), else its first value
+    held; any other model and the record unchanged. The delay-free model simulates that
+    record as the absorbed one does from a delay line holding those inputs, at the cost of
+    its own order, not of the delay line's states.
 
     Examples
     --------
@@ -187,7 +198,8 @@ def delay_free_view(model: Any, data: IOData) -> tuple[Any, IOData]:
     k = (getattr(model, "info", None) or {}).get("input_delay")
     if k is None:
         return model, data
-    return model.info["delay_free"], shift_inputs(data, np.asarray(k, dtype=int), hold=True)
+    return model.info["delay_free"], shift_inputs(data, np.asarray(k, dtype=int), hold=True,
+                                                  before=before)
 
 
 def nkshift(data: Any, nk: Any) -> IOData:

@@ -58,7 +58,7 @@ from .ties import RESOLUTION, TOL, slack, tie, wins_every_block
 
 __all__ = ["OrderChoice", "cross_validated_order", "fold_count", "fold_horizon", "folds",
            "grown_order", "held_out_fit", "held_out_folds", "insists", "output_fits",
-           "prediction_fit", "predictor", "record_folds", "simulation_errors",
+           "preceding_inputs", "prediction_fit", "predictor", "record_folds", "simulation_errors",
            "simulation_fit", "slack", "stable_first", "tie", "variation", "wins_every_block",
            "RESOLUTION"]
 
@@ -266,6 +266,40 @@ def record_folds(data: IOData) -> list[tuple[IOData, IOData]]:
             rest += [(u[p:q], y[p:q]) for p, q in ((0, lo), (hi, n)) if q - p >= MIN_BLOCK]
         if held and rest:
             out.append((_io(rest, kw), _io(held, kw)))
+    return out
+
+
+def preceding_inputs(whole: IOData, held: IOData, depth: int) -> list[np.ndarray]:
+    """The inputs recorded before each experiment of the held-out block ``held`` in the
+    record ``whole`` it was cut from (:func:`record_folds` cuts views of its experiments):
+    per experiment, at most ``depth`` rows (samples x inputs), fewer where its experiment of
+    ``whole`` starts sooner, none for a piece that starts one or is not a slice of ``whole``.
+    What a delay line holds when the block starts: a model with input delays scored on the
+    block feeds them, not a guess (:func:`sysid.models.input_delay.delay_free_view`).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.validation.crossval import preceding_inputs, record_folds
+    >>> d = sysid.IOData(u=np.arange(1000.0), y=np.zeros(1000))
+    >>> held = record_folds(d)[1][1]
+    >>> preceding_inputs(d, held, 3)[0].ravel().tolist(), float(held.u[0, 0])
+    ([197.0, 198.0, 199.0], 200.0)
+    """
+    depth = max(int(depth), 0)
+    out = []
+    for u, _ in held.experiments:
+        before = u[:0]
+        for w, _ in whole.experiments:
+            if w.ndim != 2 or w.shape[1] != u.shape[1] or not np.may_share_memory(w, u) \
+                    or w.strides != u.strides or u.shape[0] == 0:
+                continue
+            start, rem = divmod(u.ctypes.data - w.ctypes.data, w.strides[0])
+            if rem == 0 and 0 <= start and start + u.shape[0] <= w.shape[0] \
+                    and np.array_equal(w[start:start + u.shape[0]], u):
+                before = w[max(0, start - depth):start]
+                break
+        out.append(before)
     return out
 
 
