@@ -121,6 +121,7 @@ from .notes import (
     trend_check,
     weak_check,
 )
+from .oversampled import retry_decimated
 from .result import IdentifiedModel, IdentifyResult, _family, reported_fit
 from .states import stabilised_candidates, states_candidates
 from .steptest import STAIRCASE_BLOCKS, blocks_with_steps, identify_step_test, input_changes
@@ -509,6 +510,7 @@ def _final_refit(data: IOData, start: Any, order: int, ft: bool, focus: str,
     return m
 
 
+@retry_decimated  # a record sampled far faster than its input changes (oversampled.py)
 @feedback_checked()  # its own check (_checks); candidates neither repeat nor say it
 @one_blas_thread
 def identify(

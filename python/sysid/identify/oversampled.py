@@ -1,0 +1,157 @@
+"""identify on a record sampled far faster than its input changes.
+
+A throttle valve logged at 1 kHz while a chirp sweeps it from 0.26 to 2.8 Hz: every window of
+the subspace sweep (20 samples, 20 ms) sees the input as a smooth curve, the rows of future
+inputs have numerical rank 6 of 20, and every subspace estimator refuses the record
+(``ExcitationError``), so identify had nothing to start from. MATLAB's advice for such data
+is to resample them so that the sampling frequency is about ten times the band of interest
+(``idresamp``); identify now does so itself when, and only when, the record is refused for
+it: the band that holds 99.9 % of each input's power (Welch's periodogram) is put at
+:data:`BAND_SHARE` of the decimated record's Nyquist frequency (:func:`sysid.decimate`: a
+zero-phase anti-alias filter, levels kept), the record is identified there, and the chosen
+model is converted back to the record's sample time (:func:`sysid.d2d`, Tustin: order and
+stability kept, the band far below the Nyquist frequency where the two samplings agree).
+Its noise model is not converted (``K`` dropped); the coarse model stays in
+``info["decimated"]``, and ``checks["sampling"]`` says what was done. A record refused for
+any other reason (a constant input, a few steps) raises as before.
+"""
+
+from __future__ import annotations
+
+import functools
+import time
+from typing import Any
+
+import numpy as np
+
+from ..data.iodata import IOData
+from ..errors import ExcitationError
+
+__all__ = ["BAND_SHARE", "decimation_factor", "input_band", "retry_decimated"]
+
+#: the inputs' band is put at this share of the decimated record's Nyquist frequency (a
+#: sampling frequency ten times the band, the usual advice)
+BAND_SHARE = 0.2
+#: the share of each input's power that its band holds
+POWER = 0.999
+#: fewest samples the shortest experiment keeps after decimation (a few hundred per
+#: held-out block)
+MIN_KEPT = 1000
+
+
+def input_band(data: IOData) -> float:
+    """The band that holds :data:`POWER` of each input's power (its mean removed; Welch's
+    periodogram of every experiment long enough), the widest over the inputs, as a share of
+    the Nyquist frequency (1: the whole band).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.identify.oversampled import input_band
+    >>> t = np.arange(20000)
+    >>> slow = sysid.IOData(u=np.sin(2e-3 * np.pi * t), y=np.zeros(20000))
+    >>> bool(input_band(slow) < 0.01)
+    True
+    >>> white = sysid.IOData(u=np.random.default_rng(0).standard_normal(20000), y=np.zeros(20000))
+    >>> bool(input_band(white) > 0.9)
+    True
+    """
+    from scipy import signal
+
+    widest = 0.0
+    for j in range(data.n_inputs):
+        power = None
+        for u, _ in data.experiments:
+            if u.shape[0] < 64:
+                continue
+            x = u[:, j] - u[:, j].mean()
+            f, p = signal.welch(x, nperseg=min(4096, max(64, u.shape[0] // 4)))
+            power = p * u.shape[0] if power is None or power.shape != p.shape else \
+                power + p * u.shape[0]
+        if power is None or not np.sum(power) > 0:
+            return 1.0  # too short to tell, or constant: not an oversampled input
+        share = np.cumsum(power) / np.sum(power)
+        widest = max(widest, float(f[min(np.searchsorted(share, POWER), len(f) - 1)]) / 0.5)
+    return widest
+
+
+def decimation_factor(data: IOData) -> int | None:
+    """The decimation that puts the inputs' band (:func:`input_band`) at :data:`BAND_SHARE`
+    of the new Nyquist frequency, at most what keeps :data:`MIN_KEPT` samples of the shortest
+    experiment; ``None`` when that is below 2 (the record is not oversampled, or too short).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.identify.oversampled import decimation_factor
+    >>> t = np.arange(40000)
+    >>> d = sysid.IOData(u=np.sin(2 * np.pi * (1e-4 + 1e-7 * t) * t), y=np.zeros(40000))
+    >>> decimation_factor(d)
+    12
+    """
+    band = input_band(data)
+    q = min(int(BAND_SHARE / max(band, 1e-12)), min(data.lengths) // MIN_KEPT)
+    return q if q >= 2 else None
+
+
+def retry_decimated(identify: Any) -> Any:
+    """``identify`` that, on a record whose inputs the subspace sweep refuses
+    (``ExcitationError``) and that is sampled far faster than its inputs change
+    (:func:`decimation_factor`), identifies the decimated record and returns the chosen
+    model at the record's sample time (module docstring); the first error otherwise."""
+
+    @functools.wraps(identify)
+    def wrapper(data: Any, validation: Any = None, **kw: Any) -> Any:
+        t0 = time.perf_counter()
+        try:
+            return identify(data, validation, **kw)
+        except ExcitationError as err:
+            from ..data.filtering import decimate
+            from ..validation.records import validation_record
+
+            rec = data if isinstance(data, IOData) else IOData(u=data[0], y=data[1])
+            q = decimation_factor(rec)
+            if q is None:
+                raise
+            try:
+                res = identify(decimate(rec, q), None, **kw)
+            except ExcitationError:
+                raise err from None
+            return _at_record_rate(res, rec, validation_record(validation, rec), q,
+                                   time.perf_counter() - t0)
+
+    return wrapper
+
+
+def _at_record_rate(res: Any, rec: IOData, validation: IOData | None, q: int,
+                    seconds: float) -> Any:
+    """``res`` (identified on ``rec`` decimated by ``q``) with its model at ``rec``'s
+    sample time and its validation fit there."""
+    from ..models.continuous import d2d
+    from ..models.statespace import StateSpaceModel
+    from ..validation.coverage import coverage_note
+    from .result import IdentifiedModel, IdentifyResult, reported_fit
+
+    coarse = res.model.statespace
+    plain = StateSpaceModel(coarse.A, coarse.B, coarse.C, coarse.D, dt=coarse.dt,
+                            input_names=coarse.input_names, output_names=coarse.output_names)
+    unc = getattr(coarse, "uncertainty", None)
+    if unc is not None:
+        plain.uncertainty = unc
+    fine = d2d(plain, rec.dt, "tustin")
+    fine.info = {"identify": coarse.info.get("identify"),
+                 "decimated": {"q": q, "dt": coarse.dt, "model": coarse}}
+    model = IdentifiedModel(fine, res.model.u_offset, res.model.y_offset)
+    checks = dict(res.checks)
+    checks["sampling"] = (
+        f"the record is sampled far faster than its inputs change (99.9 % of their power "
+        f"below {100 * input_band(rec):.2g} % of the Nyquist frequency) and the subspace "
+        f"windows refuse it: identified on it decimated by {q} (sysid.decimate, dt = "
+        f"{coarse.dt:g}), the model converted back to dt = {rec.dt:g} (sysid.d2d, Tustin; "
+        f"no noise model); held-out fits are at the decimated rate")
+    if validation is not None and (note := coverage_note(rec, validation)) is not None:
+        checks["validation"] = note
+    out = IdentifyResult(model, res.leaderboard, res.choice, checks,
+                         reported_fit(model, validation), seconds, res.interrupted, res.score)
+    out.out_of_time = res.out_of_time
+    return out
