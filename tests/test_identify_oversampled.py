@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import sysid
-from sysid.identify.oversampled import decimation_factor, input_band
+from sysid.data.oversampling import decimation_factor, input_band
 
 DT = 0.001  # 1 kHz, as a bench logger samples a valve swept by a slow chirp
 
@@ -32,11 +32,15 @@ def _chirp_record(seed, n=40000):
 
 
 def test_every_subspace_window_refuses_the_record_as_sampled():
-    # the premise: 20 samples of a slow chirp are a smooth curve (numerical rank 6 of 20)
+    # the premise: 20 samples of a slow chirp are a smooth curve (numerical rank 6 of 20);
+    # the refusal names the decimation that helps (before: "use a richer input")
     d = _chirp_record(0)
     centred = sysid.IOData(u=d.u - d.u.mean(0), y=d.y - d.y.mean(0), dt=DT)
-    with pytest.raises(sysid.ExcitationError, match="not persistently exciting"):
+    q = decimation_factor(d)
+    with pytest.raises(sysid.ExcitationError, match="not persistently exciting") as err:
         sysid.n4sid(centred, 3)
+    assert f"sysid.decimate(data, {q})" in str(err.value) and "sysid.identify" in str(err.value)
+    assert err.value.remedy.startswith("the inputs change slowly against the sample time")
 
 
 def test_identify_decimates_an_oversampled_record_and_returns_the_model_at_its_rate():

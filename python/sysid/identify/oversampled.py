@@ -7,10 +7,11 @@ inputs have numerical rank 6 of 20, and every subspace estimator refuses the rec
 is to resample them so that the sampling frequency is about ten times the band of interest
 (``idresamp``); identify now does so itself when, and only when, the record is refused for
 it: the band that holds 99.9 % of each input's power (Welch's periodogram) is put at
-:data:`BAND_SHARE` of the decimated record's Nyquist frequency (:func:`sysid.decimate`: a
-zero-phase anti-alias filter, levels kept), the record is identified there, and the chosen
-model is converted back to the record's sample time (:func:`sysid.d2d`, Tustin: order and
-stability kept, the band far below the Nyquist frequency where the two samplings agree).
+:data:`~sysid.data.oversampling.BAND_SHARE` of the decimated record's Nyquist frequency
+(:func:`sysid.decimate`: a zero-phase anti-alias filter, levels kept), the record is
+identified there, and the chosen model is converted back to the record's sample time
+(:func:`sysid.d2d`, Tustin: order and stability kept, the band far below the Nyquist
+frequency where the two samplings agree).
 Its noise model is not converted (``K`` dropped); the coarse model stays in
 ``info["decimated"]``, and ``checks["sampling"]`` says what was done. A record refused for
 any other reason (a constant input, a few steps) raises as before.
@@ -22,83 +23,19 @@ import functools
 import time
 from typing import Any
 
-import numpy as np
-
 from ..data.iodata import IOData
+from ..data.oversampling import decimation_factor, input_band
 from ..errors import ExcitationError
 
-__all__ = ["BAND_SHARE", "decimation_factor", "input_band", "retry_decimated"]
-
-#: the inputs' band is put at this share of the decimated record's Nyquist frequency (a
-#: sampling frequency ten times the band, the usual advice)
-BAND_SHARE = 0.2
-#: the share of each input's power that its band holds
-POWER = 0.999
-#: fewest samples the shortest experiment keeps after decimation (a few hundred per
-#: held-out block)
-MIN_KEPT = 1000
-
-
-def input_band(data: IOData) -> float:
-    """The band that holds :data:`POWER` of each input's power (its mean removed; Welch's
-    periodogram of every experiment long enough), the widest over the inputs, as a share of
-    the Nyquist frequency (1: the whole band).
-
-    Examples
-    --------
-    >>> import numpy as np, sysid
-    >>> from sysid.identify.oversampled import input_band
-    >>> t = np.arange(20000)
-    >>> slow = sysid.IOData(u=np.sin(2e-3 * np.pi * t), y=np.zeros(20000))
-    >>> bool(input_band(slow) < 0.01)
-    True
-    >>> white = sysid.IOData(u=np.random.default_rng(0).standard_normal(20000), y=np.zeros(20000))
-    >>> bool(input_band(white) > 0.9)
-    True
-    """
-    from scipy import signal
-
-    widest = 0.0
-    for j in range(data.n_inputs):
-        power = None
-        for u, _ in data.experiments:
-            if u.shape[0] < 64:
-                continue
-            x = u[:, j] - u[:, j].mean()
-            f, p = signal.welch(x, nperseg=min(4096, max(64, u.shape[0] // 4)))
-            power = p * u.shape[0] if power is None or power.shape != p.shape else \
-                power + p * u.shape[0]
-        if power is None or not np.sum(power) > 0:
-            return 1.0  # too short to tell, or constant: not an oversampled input
-        share = np.cumsum(power) / np.sum(power)
-        widest = max(widest, float(f[min(np.searchsorted(share, POWER), len(f) - 1)]) / 0.5)
-    return widest
-
-
-def decimation_factor(data: IOData) -> int | None:
-    """The decimation that puts the inputs' band (:func:`input_band`) at :data:`BAND_SHARE`
-    of the new Nyquist frequency, at most what keeps :data:`MIN_KEPT` samples of the shortest
-    experiment; ``None`` when that is below 2 (the record is not oversampled, or too short).
-
-    Examples
-    --------
-    >>> import numpy as np, sysid
-    >>> from sysid.identify.oversampled import decimation_factor
-    >>> t = np.arange(40000)
-    >>> d = sysid.IOData(u=np.sin(2 * np.pi * (1e-4 + 1e-7 * t) * t), y=np.zeros(40000))
-    >>> decimation_factor(d)
-    12
-    """
-    band = input_band(data)
-    q = min(int(BAND_SHARE / max(band, 1e-12)), min(data.lengths) // MIN_KEPT)
-    return q if q >= 2 else None
+__all__ = ["retry_decimated"]
 
 
 def retry_decimated(identify: Any) -> Any:
     """``identify`` that, on a record whose inputs the subspace sweep refuses
     (``ExcitationError``) and that is sampled far faster than its inputs change
-    (:func:`decimation_factor`), identifies the decimated record and returns the chosen
-    model at the record's sample time (module docstring); the first error otherwise."""
+    (:func:`~sysid.data.oversampling.decimation_factor`), identifies the decimated record
+    and returns the chosen model at the record's sample time (module docstring); the first
+    error otherwise."""
 
     @functools.wraps(identify)
     def wrapper(data: Any, validation: Any = None, **kw: Any) -> Any:

@@ -14,6 +14,8 @@ from typing import Any, NoReturn
 
 import numpy as np
 
+from ..data.iodata import IOData
+from ..data.oversampling import oversampled_note
 from ..errors import ExcitationError
 
 __all__ = ["step_test_note", "step_changes", "stepped_inputs", "refuse_step_test",
@@ -99,8 +101,10 @@ def step_test_note(experiments: list[Any], past: int) -> str:
 
 def refuse_step_test(err: ExcitationError, experiments: list[Any], past: int) -> NoReturn:
     """Raise the core's excitation error ``err``; for a step test, with what fits one
-    (:func:`step_test_note`) in place of the core's remedy (``err.remedy``: a richer input,
-    a shorter horizon), which the new error's ``remedy`` then holds.
+    (:func:`step_test_note`), and for inputs that change slowly against the sample time,
+    the decimation that helps (:func:`~sysid.data.oversampling.oversampled_note`), in place
+    of the core's remedy (``err.remedy``: a richer input, a shorter horizon), which the new
+    error's ``remedy`` then holds.
 
     Examples
     --------
@@ -116,7 +120,8 @@ def refuse_step_test(err: ExcitationError, experiments: list[Any], past: int) ->
     ...     print(str(said)[:65])
     the input is not persistently exciting: ...: the input changes at
     """
-    note = step_test_note(experiments, past)
+    note = step_test_note(experiments, past) or oversampled_note(
+        IOData(u=[e[0] for e in experiments], y=[e[1] for e in experiments]))
     if note and err.problem:  # the core's remedy in the record's terms
         said = ExcitationError(f"{err.problem}: {note}")
         said.kind, said.problem, said.remedy = err.kind, err.problem, note
