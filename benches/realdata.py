@@ -145,6 +145,10 @@ sources, SHA-256, how each ``.npz`` is made and the findings: results/realdata_f
 twenty-second sweep's records (a small thermal plant and a DC motor run over the internet,
 each one run split 2/3 / 1/3; a heat pump in climate chambers, validated on another city's
 day); sources, SHA-256, how each ``.npz`` is made and the findings: results/realdata_fresh22.md.
+``--fresh23-records DIR`` (``FRESH23``, results/realdata_fresh23_table[_<split>].md): the
+twenty-third sweep's records (a DC servomotor, a car's throttle valve, a propeller-driven
+arm, each validated on a second run); sources, SHA-256, how each ``.npz`` is made and the
+findings: results/realdata_fresh23.md.
 
 Score: the simulation fit on the validation part, NRMSE %, ``100 (1 - |y - yhat| / |y -
 mean(y)|)`` averaged over outputs, with the initial state fitted by least squares on the
@@ -205,6 +209,7 @@ from realdata_records import (  # noqa: F401
     FRESH20,
     FRESH21,
     FRESH22,
+    FRESH23,
     MORE,
     SWEEPS,
 )

@@ -256,6 +256,18 @@ FRESH22 = {
     "ashp_hil_stage": ("ashp_hil_stage", "ashp_hil_stage_val"),
 }
 
+FRESH23 = {
+    # a DC servomotor (UNDCMotor, the 22nd sweep's rig; two later runs), 20 ms: a PRBS on the
+    # voltage -> the speed (the second run validates)
+    "dcmotor_speed_prbs": ("dcmotor_speed_prbs", "dcmotor_speed_prbs_val"),
+    # a car's electronic throttle valve on a bench, 1 ms: a chirp on the voltage -> the plate's
+    # angle, the motor's current (a repeat validates)
+    "throttle_valve_chirp": ("throttle_valve_chirp", "throttle_valve_chirp_val"),
+    # a propeller-driven arm (VTOL), 10 ms: multi-level steps of the motor command -> the
+    # arm's angle (a later run validates)
+    "vtol_arm_angle_steps": ("vtol_arm_angle_steps", "vtol_arm_angle_steps_val"),
+}
+
 #: the sweeps read from ``DIR/<name>.npz``: ``--<sweep>-records DIR`` runs a table's records
 #: into ``results/<stem>[_<split>].md`` (the third sweep's tables beside its account,
 #: results/realdata_fresh3.md)
@@ -279,4 +291,5 @@ SWEEPS = {"more": ("MORE", "realdata_more"), "fresh": ("FRESH", "realdata_fresh"
           "fresh19": ("FRESH19", "realdata_fresh19_table"),
           "fresh20": ("FRESH20", "realdata_fresh20_table"),
           "fresh21": ("FRESH21", "realdata_fresh21_table"),
-          "fresh22": ("FRESH22", "realdata_fresh22_table")}
+          "fresh22": ("FRESH22", "realdata_fresh22_table"),
+          "fresh23": ("FRESH23", "realdata_fresh23_table")}
