@@ -121,7 +121,7 @@ from .notes import (
     trend_check,
     weak_check,
 )
-from .oversampled import retry_decimated
+from .oversampled import record_feedback, retry_decimated
 from .result import IdentifiedModel, IdentifyResult, _family, reported_fit
 from .states import stabilised_candidates, states_candidates
 from .steptest import STAIRCASE_BLOCKS, blocks_with_steps, identify_step_test, input_changes
@@ -177,7 +177,7 @@ def _checks(data: IOData) -> tuple[dict[str, Any], bool, int | None]:
         except Exception as e:  # noqa: BLE001 - recorded, not raised
             checks["excitation"] = f"not checked ({e})"
         try:
-            fb = sysid.check_feedback(data)
+            fb = record_feedback() or sysid.check_feedback(data)  # decimated: the record's
             feedback = bool(fb.detected)
             checks["feedback"] = (f"{'detected' if feedback else 'not detected'} "
                                   f"({pvalue(fb.p_value)}; {fb.size_text()})")
