@@ -235,9 +235,10 @@ MAX_DECIMATE_ORDER = 30
 
 def decimate(data: IOData, q: int, *, order: int = 8) -> IOData:
     """Keep every ``q``-th sample after a zero-phase Chebyshev anti-alias filter
-    (``scipy.signal.decimate`` with ``zero_phase=True``; the filter is MATLAB's and SciPy's
-    order-``order`` type I with 0.05 dB ripple and cut-off ``0.8 / q``, scaled to unit
-    gain at DC so that levels and offsets are kept).
+    (as ``scipy.signal.decimate`` with ``zero_phase=True``; the filter is MATLAB's and
+    SciPy's order-``order`` type I with 0.05 dB ripple and cut-off ``0.8 / q``, scaled to
+    unit gain at DC so that levels and offsets are kept, applied forward and back in
+    second-order sections, which keep it well conditioned for large ``q``).
 
     ``q`` must leave every experiment at least ``MIN_DECIMATED`` (10) samples and ``order``
     lie in 1..30; otherwise a :class:`~sysid.DataError` is raised.
@@ -264,9 +265,12 @@ def decimate(data: IOData, q: int, *, order: int = 8) -> IOData:
                 f"them; {fix}")
     # SciPy's default Chebyshev filter has a DC gain of 10^(-0.05/20) (the passband ripple's
     # trough), 0.9886 forward and back: a 300 degree level became 296.6. Scaled to unit DC
-    # gain, levels and offsets survive decimation.
-    b, a = signal.cheby1(order, 0.05, 0.8 / int(q))
-    lowpass = signal.dlti(b * (np.sum(a) / np.sum(b)), a)
+    # gain, levels and offsets survive decimation. In second-order sections: as one
+    # polynomial (SciPy's decimate) the filter of cut-off 0.8 / q is ill-conditioned for large
+    # q (q = 34: a 5 V offset moved the decimated chirp by 2e-5 of its amplitude, and the
+    # record's means then changed the model identified from it)
+    sos = signal.cheby1(order, 0.05, 0.8 / int(q), output="sos")
+    sos[0, :3] /= np.prod(np.sum(sos[:, :3], axis=1) / np.sum(sos[:, 3:], axis=1))
     exps = []
     for k, e in enumerate(data._exps):
         if e.y.shape[0] <= 3 * (order + 1):
@@ -275,7 +279,7 @@ def decimate(data: IOData, q: int, *, order: int = 8) -> IOData:
         def dec(x: np.ndarray) -> np.ndarray:
             if not x.shape[1]:
                 return np.zeros((len(range(0, x.shape[0], q)), 0))
-            return signal.decimate(x, int(q), ftype=lowpass, axis=0, zero_phase=True)
+            return signal.sosfiltfilt(sos, x, axis=0, padlen=3 * (order + 1))[::q]
 
         def take(tr: np.ndarray | None) -> np.ndarray | None:
             return None if tr is None else tr[::q]
