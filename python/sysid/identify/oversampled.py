@@ -10,8 +10,12 @@ it: the band that holds 99.9 % of each input's power (Welch's periodogram) is pu
 :data:`~sysid.data.oversampling.BAND_SHARE` of the decimated record's Nyquist frequency
 (:func:`sysid.decimate`: a zero-phase anti-alias filter, levels kept), the record is
 identified there, and the chosen model is converted back to the record's sample time
-(:func:`sysid.d2d`, Tustin: order and stability kept, the band far below the Nyquist
-frequency where the two samplings agree).
+(:func:`sysid.d2d` with a first-order hold: every pole mapped exactly, ``z ** (1 / q)``,
+and the input taken as varying linearly between the decimated samples, as a band-limited
+input does; Tustin's map where a pole lies on the negative real axis, which has no such
+equivalent). On a synthetic chirp record the hold gives 99.0 %, Tustin 97.1 % (its map moves
+lightly damped modes), a zero-order hold 85.8 % (it takes the smooth input as held over
+each decimated sample: half a sample late).
 Its noise model is not converted (``K`` dropped); the coarse model stays in
 ``info["decimated"]``, and ``checks["sampling"]`` says what was done. A record refused for
 any other reason (a constant input, a few steps) raises as before.
@@ -26,7 +30,7 @@ from typing import Any
 
 from ..data.iodata import IOData
 from ..data.oversampling import decimation_factor, input_band
-from ..errors import ExcitationError
+from ..errors import ExcitationError, NumericalError
 
 __all__ = ["record_feedback", "retry_decimated"]
 
@@ -106,7 +110,12 @@ def _at_record_rate(res: Any, rec: IOData, validation: IOData | None, q: int,
     unc = getattr(coarse, "uncertainty", None)
     if unc is not None:
         plain.uncertainty = unc
-    fine = d2d(plain, rec.dt, "tustin")
+    method = "first-order hold"
+    try:
+        fine = d2d(plain, rec.dt, "foh")
+    except NumericalError:  # a pole on the negative real axis: no hold equivalent
+        method = "Tustin (a pole on the negative real axis has no first-order-hold equivalent)"
+        fine = d2d(plain, rec.dt, "tustin")
     fine.info = {"identify": coarse.info.get("identify"),
                  "decimated": {"q": q, "dt": coarse.dt, "model": coarse}}
     model = IdentifiedModel(fine, res.model.u_offset, res.model.y_offset)
@@ -115,8 +124,8 @@ def _at_record_rate(res: Any, rec: IOData, validation: IOData | None, q: int,
         f"the record is sampled far faster than its inputs change (99.9 % of their power "
         f"below {100 * input_band(rec):.2g} % of the Nyquist frequency) and the subspace "
         f"windows refuse it: identified on it decimated by {q} (sysid.decimate, dt = "
-        f"{coarse.dt:g}), the model converted back to dt = {rec.dt:g} (sysid.d2d, Tustin; "
-        f"no noise model); held-out fits are at the decimated rate, the feedback test is "
+        f"{coarse.dt:g}), the model converted back to dt = {rec.dt:g} (sysid.d2d, {method}; "
+        "no noise model); held-out fits are at the decimated rate, the feedback test is "
         f"the record's as sampled (the filter's smoothing fakes a little feedback)")
     if validation is not None and (note := coverage_note(rec, validation)) is not None:
         checks["validation"] = note
