@@ -149,6 +149,10 @@ day); sources, SHA-256, how each ``.npz`` is made and the findings: results/real
 twenty-third sweep's records (a DC servomotor, a car's throttle valve, a propeller-driven
 arm, each validated on a second run); sources, SHA-256, how each ``.npz`` is made and the
 findings: results/realdata_fresh23.md.
+``--fresh24-records DIR`` (``FRESH24``, results/realdata_fresh24_table[_<split>].md): the
+twenty-fourth sweep's records (a flexible plate with a sloshing tank, a hovercraft's yaw,
+each validated on a second run); sources, SHA-256, how each ``.npz`` is made and the
+findings: results/realdata_fresh24.md.
 
 Score: the simulation fit on the validation part, NRMSE %, ``100 (1 - |y - yhat| / |y -
 mean(y)|)`` averaged over outputs, with the initial state fitted by least squares on the
@@ -210,6 +214,7 @@ from realdata_records import (  # noqa: F401
     FRESH21,
     FRESH22,
     FRESH23,
+    FRESH24,
     MORE,
     SWEEPS,
 )

@@ -268,6 +268,15 @@ FRESH23 = {
     "vtol_arm_angle_steps": ("vtol_arm_angle_steps", "vtol_arm_angle_steps_val"),
 }
 
+FRESH24 = {
+    # a flexible plate with a water tank at its tip (sloshing), 1 ms: a chirp on two piezo
+    # patches (one voltage) -> two tip accelerations (a repeat validates)
+    "beam_tank_piezo_chirp": ("beam_tank_piezo_chirp", "beam_tank_piezo_chirp_val"),
+    # a small hovercraft tracked by motion capture, 10 ms: two thrusters' on/off commands
+    # (a PRBS) -> the yaw angle (another run validates)
+    "hovercraft_yaw_prbs": ("hovercraft_yaw_prbs", "hovercraft_yaw_prbs_val"),
+}
+
 #: the sweeps read from ``DIR/<name>.npz``: ``--<sweep>-records DIR`` runs a table's records
 #: into ``results/<stem>[_<split>].md`` (the third sweep's tables beside its account,
 #: results/realdata_fresh3.md)
@@ -292,4 +301,5 @@ SWEEPS = {"more": ("MORE", "realdata_more"), "fresh": ("FRESH", "realdata_fresh"
           "fresh20": ("FRESH20", "realdata_fresh20_table"),
           "fresh21": ("FRESH21", "realdata_fresh21_table"),
           "fresh22": ("FRESH22", "realdata_fresh22_table"),
-          "fresh23": ("FRESH23", "realdata_fresh23_table")}
+          "fresh23": ("FRESH23", "realdata_fresh23_table"),
+          "fresh24": ("FRESH24", "realdata_fresh24_table")}
