@@ -17,8 +17,9 @@ equivalent). On a synthetic chirp record the hold gives 99.0 %, Tustin 97.1 % (i
 lightly damped modes), a zero-order hold 85.8 % (it takes the smooth input as held over
 each decimated sample: half a sample late).
 Its noise model is not converted (``K`` dropped); the coarse model stays in
-``info["decimated"]``, and ``checks["sampling"]`` says what was done. A record refused for
-any other reason (a constant input, a few steps) raises as before.
+``info["decimated"]``, and ``checks["sampling"]`` says what was done. A refused record
+whose inputs fill the band (a few tones across it, white noise on collinear channels), or
+whose decimated copy is refused too, raises the first error as before.
 """
 
 from __future__ import annotations
