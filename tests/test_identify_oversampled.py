@@ -101,7 +101,7 @@ def test_a_coarse_pole_on_the_negative_real_axis_is_converted_by_tustins_map():
                                    dt=10 * DT)
     res = IdentifyResult(IdentifiedModel(coarse, [0.0], [0.0]), [], "a choice", {}, None, 0.0)
     rec = sysid.IOData(u=np.zeros(400), y=np.zeros(400), dt=DT)
-    out = _at_record_rate(res, rec, None, 10, 1.0)
+    out = _at_record_rate(res, rec, None, 10, 0.02, 1.0)
     fine = out.model.statespace
     assert fine.dt == DT and fine.nstates == 2 and "Tustin" in out.checks["sampling"]
     np.testing.assert_allclose(fine.dcgain(), coarse.dcgain(), rtol=1e-10)

@@ -64,10 +64,11 @@ def input_band(data: IOData) -> float:
     return widest
 
 
-def decimation_factor(data: IOData) -> int | None:
-    """The decimation that puts the inputs' band (:func:`input_band`) at :data:`BAND_SHARE`
-    of the new Nyquist frequency, at most what keeps :data:`MIN_KEPT` samples of the shortest
-    experiment; ``None`` when that is below 2 (the record is not oversampled, or too short).
+def decimation_factor(data: IOData, band: float | None = None) -> int | None:
+    """The decimation that puts the inputs' band (``band``, by default :func:`input_band`)
+    at :data:`BAND_SHARE` of the new Nyquist frequency, at most what keeps :data:`MIN_KEPT`
+    samples of the shortest experiment; ``None`` when that is below 2 (the record is not
+    oversampled, or too short).
 
     Examples
     --------
@@ -78,7 +79,7 @@ def decimation_factor(data: IOData) -> int | None:
     >>> decimation_factor(d)
     12
     """
-    band = input_band(data)
+    band = input_band(data) if band is None else band
     q = min(int(BAND_SHARE / max(band, 1e-12)), min(data.lengths) // MIN_KEPT)
     return q if q >= 2 else None
 
@@ -97,11 +98,12 @@ def oversampled_note(data: IOData) -> str | None:
     >>> print(oversampled_note(d)[:56])
     the inputs change slowly against the sample time (99.9 %
     """
-    q = decimation_factor(data)
+    band = input_band(data)
+    q = decimation_factor(data, band)
     if q is None:
         return None
     return (f"the inputs change slowly against the sample time (99.9 % of their power lies "
-            f"below {100 * input_band(data):.2g} % of the Nyquist frequency), so every window "
+            f"below {100 * band:.2g} % of the Nyquist frequency), so every window "
             f"of the data matrix sees a smooth curve: decimate the record first "
             f"(sysid.decimate(data, {q}) puts that band at a fifth of the new Nyquist "
             f"frequency), or use sysid.identify(data), which does so")

@@ -69,18 +69,17 @@ def retry_decimated(identify: Any) -> Any:
             return identify(data, validation, **kw)
         except ExcitationError as err:
             from ..data.filtering import decimate
+            from ..data.offsets import remove_means
+            from ..validation.feedback import check_feedback
             from ..validation.records import validation_record
 
             rec = data if isinstance(data, IOData) else IOData(u=data[0], y=data[1])
-            q = decimation_factor(rec)
+            band = input_band(rec)
+            q = decimation_factor(rec, band)
             if q is None:
                 raise
-            import sysid
-
-            from ..data.offsets import remove_means
-
             try:
-                fb = sysid.check_feedback(remove_means(rec)[0])
+                fb = check_feedback(remove_means(rec)[0])
             except Exception:  # noqa: BLE001 - a record it cannot read: the copy's own test
                 fb = None
             token = _FEEDBACK.set(fb)
@@ -90,40 +89,34 @@ def retry_decimated(identify: Any) -> Any:
                 raise err from None
             finally:
                 _FEEDBACK.reset(token)
-            return _at_record_rate(res, rec, validation_record(validation, rec), q,
+            return _at_record_rate(res, rec, validation_record(validation, rec), q, band,
                                    time.perf_counter() - t0)
 
     return wrapper
 
 
-def _at_record_rate(res: Any, rec: IOData, validation: IOData | None, q: int,
+def _at_record_rate(res: Any, rec: IOData, validation: IOData | None, q: int, band: float,
                     seconds: float) -> Any:
-    """``res`` (identified on ``rec`` decimated by ``q``) with its model at ``rec``'s
-    sample time and its validation fit there."""
+    """``res`` (identified on ``rec`` decimated by ``q``; ``band``, the inputs' band) with
+    its model at ``rec``'s sample time and its validation fit there."""
     from ..models.continuous import d2d
-    from ..models.statespace import StateSpaceModel
     from ..validation.coverage import coverage_note
     from .result import IdentifiedModel, IdentifyResult, reported_fit
 
-    coarse = res.model.statespace
-    plain = StateSpaceModel(coarse.A, coarse.B, coarse.C, coarse.D, dt=coarse.dt,
-                            input_names=coarse.input_names, output_names=coarse.output_names)
-    unc = getattr(coarse, "uncertainty", None)
-    if unc is not None:
-        plain.uncertainty = unc
+    coarse = res.model.statespace  # (d2d leaves its noise model, carries its uncertainty)
     method = "first-order hold"
     try:
-        fine = d2d(plain, rec.dt, "foh")
+        fine = d2d(coarse, rec.dt, "foh")
     except NumericalError:  # a pole on the negative real axis: no hold equivalent
         method = "Tustin (a pole on the negative real axis has no first-order-hold equivalent)"
-        fine = d2d(plain, rec.dt, "tustin")
+        fine = d2d(coarse, rec.dt, "tustin")
     fine.info = {"identify": coarse.info.get("identify"),
                  "decimated": {"q": q, "dt": coarse.dt, "model": coarse}}
     model = IdentifiedModel(fine, res.model.u_offset, res.model.y_offset)
     checks = dict(res.checks)
     checks["sampling"] = (
         f"the record is sampled far faster than its inputs change (99.9 % of their power "
-        f"below {100 * input_band(rec):.2g} % of the Nyquist frequency) and the subspace "
+        f"below {100 * band:.2g} % of the Nyquist frequency) and the subspace "
         f"windows refuse it: identified on it decimated by {q} (sysid.decimate, dt = "
         f"{coarse.dt:g}), the model converted back to dt = {rec.dt:g} (sysid.d2d, {method}; "
         "no noise model); held-out fits are at the decimated rate, the feedback test is "

@@ -120,12 +120,11 @@ def shift_inputs(data: IOData, delays: np.ndarray, hold: bool = False,
         n = u.shape[0]
         if hold:
             past = u[:0] if before is None else np.asarray(before[i]).reshape(-1, u.shape[1])
-            line = np.vstack([past, u])  # the inputs known, from the earliest
-            p = past.shape[0]
-            us.append(np.column_stack([
-                np.r_[np.full(min(n, max(0, k - p)), line[0, j]),
-                      line[max(0, p - k):max(0, p - k, p + n - k), j]]
-                for j, k in enumerate(delays)]) if u.shape[1] else u)
+            known = np.vstack([past, u])  # the inputs known, from the earliest, held before
+            line = np.vstack([np.repeat(known[:1], int(np.max(delays, initial=0)), 0), known])
+            s = len(line) - n  # where the experiment starts on the line
+            us.append(np.column_stack([line[s - k:s - k + n, j] for j, k in enumerate(delays)])
+                      if u.shape[1] else u)
             ys.append(y)
             continue
         us.append(np.column_stack([u[top - k:n - bottom - k, j] for j, k in enumerate(delays)])
