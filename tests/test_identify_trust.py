@@ -180,7 +180,7 @@ def test_refinement_stops_once_its_implied_fit_has_settled():
     """identify's refinements stop when the last iterations raised the fit their criterion
     implies by less than a tenth of what the held-out blocks resolve; the implied fit is the
     simulation fit for the output weighting (the criterion identify scores them by)."""
-    from sysid.identify.core import SETTLE_POINTS, SETTLE_WINDOW, implied_fit, settled
+    from sysid.identify.refine import SETTLE_POINTS, SETTLE_WINDOW, implied_fit, settled
     from sysid.validation.crossval import simulation_errors
 
     rng = np.random.default_rng(3)

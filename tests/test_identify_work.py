@@ -17,7 +17,7 @@ from sysid.validation.crossval import simulation_errors
 
 from conftest import daisy_split, quiet
 
-core = importlib.import_module("sysid.identify.core")
+refine = importlib.import_module("sysid.identify.refine")  # the refinements' work bounds
 
 
 @pytest.fixture
@@ -38,25 +38,25 @@ def pem_calls(monkeypatch):
 def test_iteration_work_counts_samples_outputs_and_parameters_squared():
     d = sysid.IOData(u=np.zeros((200, 2)), y=np.zeros((200, 3)))
     # order 4: 4 (2 + 3 + 1) = 24, D 6, K 12
-    assert core.iteration_work(d, 4, False, False) == 200 * 3 * 24 ** 2
-    assert core.iteration_work(d, 4, True, True) == 200 * 3 * (24 + 6 + 12) ** 2
+    assert refine.iteration_work(d, 4, False, False) == 200 * 3 * 24 ** 2
+    assert refine.iteration_work(d, 4, True, True) == 200 * 3 * (24 + 6 + 12) ** 2
 
 
 def test_whole_record_refit_converges_when_cheap_and_stops_once_settled_when_not(monkeypatch):
     est, _ = daisy_split("dryer")
     start = quiet(sysid.n4sid, est, 4, feedthrough=False)
-    w = core.iteration_work(est, 4, False, False)
-    cheap = quiet(core._final_refit, est, start, 4, False, "simulation", "output")
+    w = refine.iteration_work(est, 4, False, False)
+    cheap = quiet(refine._final_refit, est, start, 4, False, "simulation", "output")
     assert "identify_refit" not in cheap.info
-    monkeypatch.setattr(core, "FINAL_WORK", 8 * w)  # 8 iterations' worth
-    capped = quiet(core._final_refit, est, start, 4, False, "simulation", "output")
+    monkeypatch.setattr(refine, "FINAL_WORK", 8 * w)  # 8 iterations' worth
+    capped = quiet(refine._final_refit, est, start, 4, False, "simulation", "output")
     assert capped.info["pem"]["iterations"] <= 8
     assert "until settled" in capped.info["identify_refit"]
     assert capped.info["pem"]["iterations"] < cheap.info["pem"]["iterations"]
     # capped, it starts from whichever of its start and the refinement's fold fits simulates
     # the record best (a settled search ends where its start leads it)
     assert "from its start" in capped.info["identify_refit"]
-    better = quiet(core._final_refit, est, start, 4, False, "simulation", "output",
+    better = quiet(refine._final_refit, est, start, 4, False, "simulation", "output",
                    [start, cheap])
     assert "from its fit on fold 2" in better.info["identify_refit"]
     assert better.info["pem"]["cost"][-1] <= capped.info["pem"]["cost"][-1]
@@ -73,15 +73,15 @@ def test_identify_bounds_the_work_of_refinements_and_says_what_it_left_out(monke
     pem_calls.clear()
     # bounds a record of this size meets only at long lengths: one refinement, fold fits
     # capped, the whole-record re-fit stopped once settled
-    monkeypatch.setattr(core, "REFINE_WORK", 1.0)
-    monkeypatch.setattr(core, "FOLD_WORK", 1.0)
-    monkeypatch.setattr(core, "FINAL_WORK", 1.0)
+    monkeypatch.setattr(refine, "REFINE_WORK", 1.0)
+    monkeypatch.setattr(refine, "FOLD_WORK", 1.0)
+    monkeypatch.setattr(refine, "FINAL_WORK", 1.0)
     res = quiet(sysid.identify, est, progress=False)
     assert not any(r["focus"] == "prediction" for r in res.leaderboard)
     assert "prediction-focus refinement" in res.checks["long_record"]
     assert "long_record: not scored" in res.summary()
     folds = [c for c in pem_calls if c[0] < sum(est.lengths)]
-    assert folds and all(c[1] == core.SETTLE_WINDOW + 1 for c in folds)
+    assert folds and all(c[1] == refine.SETTLE_WINDOW + 1 for c in folds)
     assert sum(r["family"] == "pem" for r in res.leaderboard) == 1
     chosen = next(r for r in res.leaderboard if r["chosen"])
     if chosen["family"] == "pem":  # the chosen refinement, re-fitted until settled
@@ -204,7 +204,7 @@ def test_a_final_refit_stopped_at_its_cap_is_noted_with_the_call_that_searches_o
     cap and the call, which runs as printed and searches on from the model (on the winding
     record, whose choice is a prediction-error refinement)."""
     est, _ = daisy_split("winding")
-    monkeypatch.setattr(core, "FINAL_ITER", 3)
+    monkeypatch.setattr(refine, "FINAL_ITER", 3)
     res = quiet(sysid.identify, est, progress=False)
     assert res.model.statespace.info["pem"]["stop"] == "maximum iterations"
     note = res.checks["final_refit"]

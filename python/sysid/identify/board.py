@@ -239,9 +239,9 @@ class Board:
         self.out_of_time = False
         #: the whole record (its refinements' fold fits are further starts of their re-fit)
         self.whole: IOData | None = None
-        #: refinements left out to keep the work in proportion (:data:`.core.REFINE_WORK`)
+        #: refinements left out to keep the work in proportion (:data:`.refine.REFINE_WORK`)
         self.skipped: list[str] = []
-        #: the expected work of the refinements scored so far (:data:`.core.REFINE_WORK`)
+        #: the expected work of the refinements scored so far (:data:`.refine.REFINE_WORK`)
         self.refine_work = 0.0
         #: folds left out because their fitted part does not excite the input enough
         self.unexcited = 0

@@ -38,7 +38,7 @@ def ssest_start(data: IOData, order: int, ft: bool) -> Any:
 
 def higher_orders(board: Board, refine: Callable[..., None], limit: int) -> None:
     """One order above the best simulation-focus refinement, refined likewise (``refine``:
-    :func:`.core._refine`) from :func:`ssest_start` on every fold, and on up while each order
+    :func:`.refine._refine`) from :func:`ssest_start` on every fold, and on up while each order
     scores above the last by more than :func:`.board.tie` (``limit`` orders at most; for
     open-loop records, the start being an open-loop subspace fit). Only when that refinement
     is of the highest order refined and scores above every subspace candidate (stable or not)
