@@ -153,6 +153,10 @@ findings: results/realdata_fresh23.md.
 twenty-fourth sweep's records (a flexible plate with a sloshing tank, a hovercraft's yaw,
 each validated on a second run); sources, SHA-256, how each ``.npz`` is made and the
 findings: results/realdata_fresh24.md.
+``--fresh25-records DIR`` (``FRESH25``, results/realdata_fresh25_table[_<split>].md): the
+twenty-fifth sweep's records (a double pendulum driven at both joints: a closed-loop
+tracking run, an open-loop run of sine torques validated on a second run); sources, SHA-256,
+how each ``.npz`` is made and the findings: results/realdata_fresh25.md.
 
 Score: the simulation fit on the validation part, NRMSE %, ``100 (1 - |y - yhat| / |y -
 mean(y)|)`` averaged over outputs, with the initial state fitted by least squares on the
@@ -215,6 +219,7 @@ from realdata_records import (  # noqa: F401
     FRESH22,
     FRESH23,
     FRESH24,
+    FRESH25,
     MORE,
     SWEEPS,
 )

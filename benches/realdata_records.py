@@ -277,6 +277,16 @@ FRESH24 = {
     "hovercraft_yaw_prbs": ("hovercraft_yaw_prbs", "hovercraft_yaw_prbs_val"),
 }
 
+FRESH25 = {
+    # a double pendulum (two torque-controlled joint motors), 1/300 s: the measured joint
+    # torques -> the two joint angles while a PID tracks a 75 s trajectory (closed loop;
+    # split 2/3 : 1/3)
+    "double_pendulum_track": ("double_pendulum_track", None),
+    # the same rig in open loop, 2 ms: a sine torque command on each joint -> the two angles
+    # (a second run, the two frequencies swapped between the joints, validates)
+    "double_pendulum_sine": ("double_pendulum_sine", "double_pendulum_sine_val"),
+}
+
 #: the sweeps read from ``DIR/<name>.npz``: ``--<sweep>-records DIR`` runs a table's records
 #: into ``results/<stem>[_<split>].md`` (the third sweep's tables beside its account,
 #: results/realdata_fresh3.md)
@@ -302,4 +312,5 @@ SWEEPS = {"more": ("MORE", "realdata_more"), "fresh": ("FRESH", "realdata_fresh"
           "fresh21": ("FRESH21", "realdata_fresh21_table"),
           "fresh22": ("FRESH22", "realdata_fresh22_table"),
           "fresh23": ("FRESH23", "realdata_fresh23_table"),
-          "fresh24": ("FRESH24", "realdata_fresh24_table")}
+          "fresh24": ("FRESH24", "realdata_fresh24_table"),
+          "fresh25": ("FRESH25", "realdata_fresh25_table")}
