@@ -63,7 +63,9 @@
    ``validation`` data, when given, are only reported on.
 5. The chosen model's simulation errors on the record are checked for a drift the input does
    not explain (:mod:`.notes`, ``checks["trend"]``), its held-out fit for a model
-   that explains less than half of the outputs' variation (``checks["weak"]``), and its
+   that explains less than half of the outputs' variation (``checks["weak"]``) or that
+   simulates the whole record clearly worse than its held-out blocks
+   (``checks["whole_record"]``: an error that builds up over longer than a block), and its
    re-fit for a stop at the iteration cap (``checks["final_refit"]``).
 """
 
@@ -111,6 +113,7 @@ from .notes import (
     refit_cap_check,
     trend_check,
     weak_check,
+    whole_record_check,
 )
 from .oversampled import record_feedback, retry_decimated
 from .refine import N_REFINE, _refine, _refined_candidates, _stabilised_refinements
@@ -440,6 +443,7 @@ def identify(
     trend_check(model, centred, checks)
     persistent_mode_check(model, centred, checks)
     weak_check(float(chosen["held_out_fit"]), checks)
+    whole_record_check(model, centred, float(chosen["held_out_fit"]), shortest, checks)
     loop_checks(chosen, feedback, checks)
     if getattr(model, "uncertainty", None) is None:
         model = within_delay(centred, model, lambda d, m: with_uncertainty(
