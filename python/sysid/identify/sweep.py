@@ -43,7 +43,15 @@ def horizon(data: IOData) -> int:
     :data:`SHORT_HORIZON` as long as the data matrix keeps three columns a row (as a fold's
     horizon does, :func:`~sysid.validation.crossval.fold_horizon`). With the ten-column rule
     alone a 100-sample record of one input and output had horizon 2, and every candidate
-    order 1: a two-state plant validated at 35 %, where ``ssest(data, 2)`` gives 96 %."""
+    order 1: a two-state plant validated at 35 %, where ``ssest(data, 2)`` gives 96 %.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.identify.sweep import horizon
+    >>> horizon(sysid.IOData(u=np.zeros(100), y=np.zeros(100)))  # short: SHORT_HORIZON
+    4
+    """
     h = available_horizon(data.lengths, data.n_inputs, data.n_outputs)
     if h >= SHORT_HORIZON:
         return h
@@ -54,6 +62,31 @@ def horizon(data: IOData) -> int:
 
 def subspace_candidates(board: Board, full: IOData, methods: tuple[str, ...],
                          max_order: int | None) -> None:
+    """The subspace sweep of :func:`sysid.identify` on ``board``: ``methods`` (with and
+    without feedthrough) at every order 1 to ``max_order`` (default: what every fold's window
+    allows, at most :data:`~sysid.validation.crossval.MAX_ORDER`, grown past it for a method
+    whose best order is the grid's top), each fitted to every fold's part (its horizon, by
+    :func:`horizon` of ``full``, as the fold allows it) and scored on the held-out blocks; each
+    row carries its stable-``A`` variant (open-loop weightings), and ``board.subspace`` the
+    fold estimators for the state-sequence candidates. Folds whose fitted part does not excite
+    the input enough are left out (``board.unexcited``); with fewer than two left it raises.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid._progress import Bar
+    >>> from sysid.identify.board import Board
+    >>> from sysid.identify.sweep import subspace_candidates
+    >>> from sysid.validation.crossval import record_folds
+    >>> rng = np.random.default_rng(0)
+    >>> u = rng.standard_normal(900)
+    >>> y = sysid.StateSpaceModel([[0.7]], [[1.0]], [[1.0]]).simulate(u).ravel()
+    >>> d = sysid.IOData(u=u, y=y + 0.05 * rng.standard_normal(900))
+    >>> board = Board(record_folds(d), Bar(None, "sweep", enabled=False))
+    >>> subspace_candidates(board, d, ("moesp",), 3)
+    >>> [(r["order"], r["feedthrough"]) for r in board.rows][:4]
+    [(1, False), (2, False), (3, False), (1, True)]
+    """
     from ..subspace.estimator import SubspaceEstimator
 
     ests, keep = [], []
