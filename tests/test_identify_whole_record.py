@@ -77,7 +77,7 @@ def test_identify_checks_its_choice_on_the_whole_record(monkeypatch):
     def spy(model, data, held_out_fit, block, checks):
         seen.append((model, data, held_out_fit, block))
         real(model, data, held_out_fit, block, checks)
-        checks["whole_record"] = "spied"  # the note reaches the result as written
+        checks["whole_record"] = "spied"  # as if the whole record showed the gap
     monkeypatch.setattr(core, "whole_record_check", spy)
     rng = np.random.default_rng(1)
     true = sysid.StateSpaceModel([[0.8]], [[1.0]], [[1.0]])
@@ -90,4 +90,50 @@ def test_identify_checks_its_choice_on_the_whole_record(monkeypatch):
     assert held == pytest.approx(chosen["held_out_fit"])
     assert np.array_equal(model.A, res.model.statespace.A)  # (its uncertainty added after)
     assert sum(data.lengths) == 600 and 0 < block < 600
-    assert res.checks["whole_record"] == "spied" and "whole_record: spied" in res.summary()
+    # the note reaches the result, and with it the choice is made again on the whole record
+    assert res.checks["whole_record"].startswith("spied; ")
+    assert "re-fitted" in res.checks["whole_record"] or "re-chosen" in res.checks["whole_record"]
+    assert "whole_record: spied" in res.summary()
+
+
+def _row(model, held, stable=True, **kw):
+    return {"family": "moesp", "order": model.nstates, "feedthrough": False, "focus": None,
+            "criterion": "subspace", "held_out_fit": held, "stable": stable,
+            "refit": lambda data, m=model: m, "note": "", **kw}
+
+
+class _Board:
+    def __init__(self, rows):
+        self.rows = rows
+
+
+def test_the_choice_is_made_again_on_the_whole_record_when_the_blocks_cannot_judge_it():
+    from sysid.identify.choice import rechoose_on_whole_record
+
+    d = _integrating_record()
+    slow = sysid.StateSpaceModel([[0.98]], [[0.01]], [[1.0]])
+    near = sysid.StateSpaceModel([[0.99999]], [[0.01]], [[1.0]])  # the integrator, nearly
+    exact = sysid.StateSpaceModel([[1.0 - 1e-9]], [[0.01]], [[1.0]])
+    chosen = _row(slow, 95.0)
+    rows = [chosen,
+            _row(near, 95.0 - LONG_GAP + 1.0),  # within the gap: a candidate
+            _row(exact, 95.0 - LONG_GAP - 1.0),  # better still, but the blocks rule it out
+            _row(exact, 94.0, stable=False),  # unstable on some block: not a candidate
+            _row(exact, 94.0, start_only=True)]  # a start only: not a candidate
+    checks: dict = {}
+    whole_record_check(slow, d, 95.0, 600, checks)
+    model, row = rechoose_on_whole_record(_Board(rows), d, slow, chosen, checks)
+    assert row is rows[1] and model is near
+    assert row["note"].startswith("chosen by the BIC of the whole record")
+    note = checks["whole_record"]
+    assert note.startswith("the held-out blocks' choice (moesp, order 1) simulates")
+    assert "re-chosen by the BIC" in note and "among the 2 stable candidates" in note
+    # no better candidate within the gap: the choice stands, and the note says so
+    checks = {}
+    whole_record_check(slow, d, 95.0, 600, checks)
+    model, row = rechoose_on_whole_record(_Board([chosen, rows[2]]), d, slow, chosen, checks)
+    assert row is chosen and model is slow
+    assert "no stable candidate within 10 points" in checks["whole_record"]
+    # without the note nothing is re-fitted
+    model, row = rechoose_on_whole_record(None, d, slow, chosen, {})
+    assert row is chosen

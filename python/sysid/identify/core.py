@@ -101,7 +101,7 @@ from ..validation.output_error import feedback_checked
 from ..validation.records import validation_record
 from ..validation.swept import held_out_design
 from .board import Board, free_poles, informative, unstable
-from .choice import _choose
+from .choice import _choose, rechoose_on_whole_record
 from .climb import higher_orders
 from .delay import delay_candidates, detected_delays, keep_if_shown, within_delay
 from .integrating import integrating_candidates, integrating_note
@@ -400,6 +400,8 @@ def identify(
     ranked = board.ranked(allow_unstable=enforce_stability is False or insist is not None)
     model, chosen = _choose(board, ranked, centred, enforce_stability is True or (
         enforce_stability is None and insist is None))
+    whole_record_check(model, centred, float(chosen["held_out_fit"]), shortest, checks)
+    model, chosen = rechoose_on_whole_record(board, centred, model, chosen, checks)
     if (note := integrating_note(model)) is not None:
         checks["integrating"] = note
     if unstable(model):
@@ -443,7 +445,6 @@ def identify(
     trend_check(model, centred, checks)
     persistent_mode_check(model, centred, checks)
     weak_check(float(chosen["held_out_fit"]), checks)
-    whole_record_check(model, centred, float(chosen["held_out_fit"]), shortest, checks)
     loop_checks(chosen, feedback, checks)
     if getattr(model, "uncertainty", None) is None:
         model = within_delay(centred, model, lambda d, m: with_uncertainty(
