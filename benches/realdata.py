@@ -157,6 +157,10 @@ findings: results/realdata_fresh24.md.
 twenty-fifth sweep's records (a double pendulum driven at both joints: a closed-loop
 tracking run, an open-loop run of sine torques validated on a second run); sources, SHA-256,
 how each ``.npz`` is made and the findings: results/realdata_fresh25.md.
+``--fresh26-records DIR`` (``FRESH26``, results/realdata_fresh26_table[_<split>].md): the
+twenty-sixth sweep's records (airborne wind energy: a soft kite's steering and a tethered
+aircraft's control surfaces, both under their autopilots); sources, SHA-256, how each
+``.npz`` is made and the findings: results/realdata_fresh26.md.
 
 Score: the simulation fit on the validation part, NRMSE %, ``100 (1 - |y - yhat| / |y -
 mean(y)|)`` averaged over outputs, with the initial state fitted by least squares on the
@@ -220,6 +224,7 @@ from realdata_records import (  # noqa: F401
     FRESH23,
     FRESH24,
     FRESH25,
+    FRESH26,
     MORE,
     SWEEPS,
 )

@@ -287,6 +287,16 @@ FRESH25 = {
     "double_pendulum_sine": ("double_pendulum_sine", "double_pendulum_sine_val"),
 }
 
+FRESH26 = {
+    # a 25 m^2 soft kite flying pumping cycles under its autopilot (closed loop), 0.1 s: the
+    # realised steering and depower -> the kite's yaw rate (the next cycle validates)
+    "kite_steer_yawrate": ("kite_steer_yawrate", "kite_steer_yawrate_val"),
+    # a tethered rigid-wing aircraft (Ampyx AP2) in one pumping cycle, 20 ms: aileron,
+    # elevator and rudder demands of its flight computer -> roll, pitch and yaw rates
+    # (closed loop; split 2/3 : 1/3)
+    "ampyx_ap2_rates": ("ampyx_ap2_rates", None),
+}
+
 #: the sweeps read from ``DIR/<name>.npz``: ``--<sweep>-records DIR`` runs a table's records
 #: into ``results/<stem>[_<split>].md`` (the third sweep's tables beside its account,
 #: results/realdata_fresh3.md)
@@ -313,4 +323,5 @@ SWEEPS = {"more": ("MORE", "realdata_more"), "fresh": ("FRESH", "realdata_fresh"
           "fresh22": ("FRESH22", "realdata_fresh22_table"),
           "fresh23": ("FRESH23", "realdata_fresh23_table"),
           "fresh24": ("FRESH24", "realdata_fresh24_table"),
-          "fresh25": ("FRESH25", "realdata_fresh25_table")}
+          "fresh25": ("FRESH25", "realdata_fresh25_table"),
+          "fresh26": ("FRESH26", "realdata_fresh26_table")}
