@@ -65,7 +65,9 @@
    not explain (:mod:`.notes`, ``checks["trend"]``), its held-out fit for a model
    that explains less than half of the outputs' variation (``checks["weak"]``) or that
    simulates the whole record clearly worse than its held-out blocks
-   (``checks["whole_record"]``: an error that builds up over longer than a block), and its
+   (``checks["whole_record"]``: an error that builds up over longer than a block; the choice
+   is then made again by the whole record's BIC among the stable candidates within 10
+   points, :func:`.choice.rechoose_on_whole_record`), and its
    re-fit for a stop at the iteration cap (``checks["final_refit"]``).
 """
 
