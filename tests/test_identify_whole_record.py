@@ -87,7 +87,7 @@ def test_identify_checks_its_choice_on_the_whole_record(monkeypatch):
     assert len(seen) == 1
     model, data, held, block = seen[0]
     chosen = next(r for r in res.leaderboard if r["chosen"])
-    assert held == pytest.approx(chosen["held_out_fit"])
+    assert held <= chosen["held_out_fit"] + 1e-9  # the lower of its two pooled fits
     assert np.array_equal(model.A, res.model.statespace.A)  # (its uncertainty added after)
     assert sum(data.lengths) == 600 and 0 < block < 600
     # the note reaches the result, and with it the choice is made again on the whole record
@@ -137,3 +137,21 @@ def test_the_choice_is_made_again_on_the_whole_record_when_the_blocks_cannot_jud
     # without the note nothing is re-fitted
     model, row = rechoose_on_whole_record(None, d, slow, chosen, {})
     assert row is chosen
+
+
+def test_the_blocks_fit_compared_is_the_lower_of_the_trimmed_and_the_whole_pool():
+    from sysid.identify.board import Board, held_out_score
+
+    b = Board.__new__(Board)
+    b.weights = np.array([[1.0], [1.0], [1.0], [1.0], [1.0]])
+    # one block far worse than the others: the score leaves it out, the whole pool does not
+    outs = [[90.0], [91.0], [89.0], [90.0], [-50.0]]
+    row = {"held_out_fit": held_out_score(outs, b.weights), "fold_output_fits": outs}
+    assert row["held_out_fit"] > 89.0
+    assert b.lower_score(row) == pytest.approx(held_out_score(outs, b.weights, trim=False))
+    assert b.lower_score(row) < row["held_out_fit"] - LONG_GAP  # a gap of one block alone
+    # an unusually good block left out: the score itself is the lower one
+    outs = [[60.0], [61.0], [59.0], [60.0], [99.0]]
+    row = {"held_out_fit": held_out_score(outs, b.weights), "fold_output_fits": outs}
+    assert b.lower_score(row) == row["held_out_fit"]
+    assert b.lower_score({"held_out_fit": 70.0}) == 70.0  # no block fits kept: the score

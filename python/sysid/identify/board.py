@@ -285,6 +285,14 @@ class Board:
         """:func:`held_out_score` of per-output fits on the first ``len(fits)`` blocks."""
         return held_out_score(fits, self.weights[:len(fits)])
 
+    def lower_score(self, row: dict[str, Any]) -> float:
+        """The lower of ``row``'s held-out score and its blocks pooled without leaving out
+        the extremes: what the blocks say with or without their atypical ones (on a maglev
+        record the worst block, left out, was the one that resembled fresh data)."""
+        outs = row.get("fold_output_fits") or []
+        whole = held_out_score(outs, self.weights[:len(outs)], trim=False) if outs else np.inf
+        return float(min(row["held_out_fit"], whole))
+
     def stopper(self) -> Any:
         """A progress callback for iterative fits: stops them once the budget is spent."""
         def cb(*_: Any) -> bool:

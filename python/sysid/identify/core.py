@@ -402,7 +402,7 @@ def identify(
     ranked = board.ranked(allow_unstable=enforce_stability is False or insist is not None)
     model, chosen = _choose(board, ranked, centred, enforce_stability is True or (
         enforce_stability is None and insist is None))
-    whole_record_check(model, centred, float(chosen["held_out_fit"]), shortest, checks)
+    whole_record_check(model, centred, board.lower_score(chosen), shortest, checks)
     model, chosen = rechoose_on_whole_record(board, centred, model, chosen, checks)
     if (note := integrating_note(model)) is not None:
         checks["integrating"] = note
