@@ -161,6 +161,10 @@ how each ``.npz`` is made and the findings: results/realdata_fresh25.md.
 twenty-sixth sweep's records (airborne wind energy: a soft kite's steering and a tethered
 aircraft's control surfaces, both under their autopilots); sources, SHA-256, how each
 ``.npz`` is made and the findings: results/realdata_fresh26.md.
+``--fresh27-records DIR`` (``FRESH27``, results/realdata_fresh27_table[_<split>].md): the
+twenty-seventh sweep's record (a 7-joint robot arm's torques -> joint positions under its
+joint controller); sources, SHA-256, how the ``.npz`` is made and the findings:
+results/realdata_fresh27.md.
 
 Score: the simulation fit on the validation part, NRMSE %, ``100 (1 - |y - yhat| / |y -
 mean(y)|)`` averaged over outputs, with the initial state fitted by least squares on the
@@ -225,6 +229,7 @@ from realdata_records import (  # noqa: F401
     FRESH24,
     FRESH25,
     FRESH26,
+    FRESH27,
     MORE,
     SWEEPS,
 )

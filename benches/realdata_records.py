@@ -297,6 +297,13 @@ FRESH26 = {
     "ampyx_ap2_rates": ("ampyx_ap2_rates", None),
 }
 
+FRESH27 = {
+    # a 7-joint robot arm (Franka Emika Panda) following an exciting Fourier-series trajectory
+    # under its joint controller (closed loop), 1 ms: the seven joint torques -> the seven
+    # joint positions (split 2/3 : 1/3)
+    "franka_panda": ("franka_panda", None),
+}
+
 #: the sweeps read from ``DIR/<name>.npz``: ``--<sweep>-records DIR`` runs a table's records
 #: into ``results/<stem>[_<split>].md`` (the third sweep's tables beside its account,
 #: results/realdata_fresh3.md)
@@ -324,4 +331,5 @@ SWEEPS = {"more": ("MORE", "realdata_more"), "fresh": ("FRESH", "realdata_fresh"
           "fresh23": ("FRESH23", "realdata_fresh23_table"),
           "fresh24": ("FRESH24", "realdata_fresh24_table"),
           "fresh25": ("FRESH25", "realdata_fresh25_table"),
-          "fresh26": ("FRESH26", "realdata_fresh26_table")}
+          "fresh26": ("FRESH26", "realdata_fresh26_table"),
+          "fresh27": ("FRESH27", "realdata_fresh27_table")}
