@@ -35,14 +35,9 @@ def _choose(board: Board, ranked: list[dict[str, Any]], data: IOData, stable_onl
         refined = [r for r in near if not r["criterion"].startswith("subspace")]
         near = [r for r in near if r["criterion"].startswith("subspace") or r is refined[0]]
     for r in near:
-        m = _refit_one(r, data, stable_only)
-        if m is not None:
-            try:
-                r["bic"] = bic(m, data)
-            except Exception:  # noqa: BLE001 - cannot be simulated on the record
-                r["note"] = "re-fit on the whole record cannot be simulated"
-                continue
-            fitted.append((r["bic"], r, m))
+        got = _whole_bic(r, data, stable_only)
+        if got is not None:
+            fitted.append((got[0], r, got[1]))
     if fitted:
         # a re-fit with a mode that acts as an integrator over the record, held inside the
         # unit circle by nothing the data say (often the search's stability bound), follows
@@ -124,6 +119,31 @@ def follows_drift(model: Any, data: IOData) -> bool:
         return True
 
 
+def _whole_bic(r: dict[str, Any], data: IOData, stable_only: bool) -> tuple[float, Any] | None:
+    """``(BIC, model)`` of candidate ``r`` re-fitted on the whole record ``data``
+    (:func:`.board.bic`, also kept as ``r["bic"]``); the re-fit is made once per record and
+    kept in the row (the choice and the whole-record re-choice weigh the same re-fits). None
+    (noted) when the re-fit fails, is unstable where a stable model is wanted, or cannot be
+    simulated on the record."""
+    kept = r.get("whole_refit")
+    if kept is None or kept[0] is not data:
+        kept = r["whole_refit"] = [data, _refit_one(r, data, False), None]
+    _, m, value = kept
+    if m is None:
+        return None
+    if stable_only and unstable(m):  # (an integrator made explicit is not unstable)
+        r["note"] = "re-fit on the whole record unstable"
+        return None
+    if value is None:
+        try:
+            value = kept[2] = r["bic"] = bic(m, data)
+        except Exception:  # noqa: BLE001 - cannot be simulated on the record
+            r["note"] = "re-fit on the whole record cannot be simulated"
+            kept[1] = None
+            return None
+    return value, m
+
+
 def _refit_one(r: dict[str, Any], data: IOData, stable_only: bool) -> Any:
     """Candidate ``r`` re-fitted on the whole record, or None (noted) when that fails or is
     unstable where a stable model is wanted."""
@@ -177,16 +197,10 @@ def rechoose_on_whole_record(board: Board, data: IOData, model: Any, chosen: dic
     except Exception:  # noqa: BLE001 - cannot be simulated on the record: any other will do
         own = np.inf
     best = (own, chosen, model)
-    for r in pool:
-        m = _refit_one(r, data, True)
-        if m is None:
-            continue
-        try:
-            r["bic"] = bic(m, data)
-        except Exception:  # noqa: BLE001
-            continue
-        if r["bic"] < best[0]:
-            best = (r["bic"], r, m)
+    for r in pool:  # (the near-best ones were re-fitted by the choice already)
+        got = _whole_bic(r, data, True)
+        if got is not None and got[0] < best[0]:
+            best = (got[0], r, got[1])
     _, r, m = best
     if r is chosen:
         checks["whole_record"] += (

@@ -432,7 +432,7 @@ def identify(
         r["chosen"] = r is chosen
     rows = [{k: v for k, v in r.items()
              if k not in ("refit", "fit_fn", "start", "stabilised", "fold_models",
-                          "fold_output_fits")}
+                          "fold_output_fits", "whole_refit")}
             for r in ranked]
     desc = (f"{_family(chosen)}"
             + (f" ({chosen['focus']} focus)" if chosen["focus"] else "")
