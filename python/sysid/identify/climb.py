@@ -39,16 +39,22 @@ def ssest_start(data: IOData, order: int, ft: bool) -> Any:
 def higher_orders(board: Board, refine: Callable[..., None], limit: int) -> None:
     """One order above the best simulation-focus refinement, refined likewise (``refine``:
     :func:`.refine._refine`) from :func:`ssest_start` on every fold, and on up while each order
-    scores above the last by more than :func:`.board.tie` (``limit`` orders at most; for
-    open-loop records, the start being an open-loop subspace fit). Only when that refinement
-    is of the highest order refined and scores above every subspace candidate (stable or not)
-    by more than a tie: the subspace scores, which picked the orders to refine, then
-    understate what the model class reaches, and cannot rule out the orders above (up to the
-    sweep's largest order). On a gantry crane's load swing (trolley motor voltage to rope
-    angle: a lightly damped pendulum behind the motor) the order-2 refinement rose 13 points
-    above the best subspace fit of any order (most unstable on some held-out block), and no
-    order above was refined: orders 3 and 4 then score 79.8 and 80.2 % held out against 73.7
-    %, and order 4 validates at 87.2 % against 56.2 % (benches/results/realdata_fresh9.md).
+    scores above the last by more than :func:`.board.tie` (``limit`` orders at most). Only when
+    that refinement is of the highest order refined and scores above every subspace candidate
+    (stable or not) by more than a tie: the subspace scores, which picked the orders to
+    refine, then understate what the model class reaches, and cannot rule out the orders
+    above (up to the sweep's largest order). On a gantry crane's load swing (trolley motor
+    voltage to rope angle: a lightly damped pendulum behind the motor) the order-2 refinement
+    rose 13 points above the best subspace fit of any order (most unstable on some held-out
+    block), and no order above was refined: orders 3 and 4 then score 79.8 and 80.2 % held
+    out against 73.7 %, and order 4 validates at 87.2 % against 56.2 %
+    (benches/results/realdata_fresh9.md).
+
+    Under feedback too: the start, an open-loop subspace fit, is only a start there, as are
+    those of the other refinements (a simulation-error search from it). On a flask titrated
+    under a pH controller (the closed-loop subspace fits' scores pointing at order 1 alone)
+    the order-1 refinement rose past every subspace fit and validated at 3.4 %; the order-2
+    refinement above it validates at 71.4 % (benches/results/realdata_fresh28.md).
 
     Examples
     --------

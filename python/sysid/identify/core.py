@@ -338,8 +338,7 @@ def identify(
         if refine:
             _refined_candidates(board)
             _stabilised_refinements(board)
-            if not feedback:
-                higher_orders(board, _refine, N_REFINE)
+            higher_orders(board, _refine, N_REFINE)
             if all(r["criterion"].startswith("subspace") for r in board.rows):
                 checks["refinement"] = (
                     "none scored: no stable subspace candidate to start a prediction-error "
