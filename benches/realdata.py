@@ -165,6 +165,10 @@ aircraft's control surfaces, both under their autopilots); sources, SHA-256, how
 twenty-seventh sweep's record (a 7-joint robot arm's torques -> joint positions under its
 joint controller); sources, SHA-256, how the ``.npz`` is made and the findings:
 results/realdata_fresh27.md.
+``--fresh28-records DIR`` (``FRESH28``, results/realdata_fresh28_table[_<split>].md): the
+twenty-eighth sweep's records (a race car's camber actuator under its position servo, a
+refinery's sulfur recovery unit, a plate heat exchanger); sources, SHA-256, how each ``.npz``
+is made and the findings: results/realdata_fresh28.md.
 
 Score: the simulation fit on the validation part, NRMSE %, ``100 (1 - |y - yhat| / |y -
 mean(y)|)`` averaged over outputs, with the initial state fitted by least squares on the
@@ -230,6 +234,7 @@ from realdata_records import (  # noqa: F401
     FRESH25,
     FRESH26,
     FRESH27,
+    FRESH28,
     MORE,
     SWEEPS,
 )

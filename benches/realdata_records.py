@@ -304,6 +304,29 @@ FRESH27 = {
     "franka_panda": ("franka_panda", None),
 }
 
+FRESH28 = {
+    # a race car's camber/toe linear actuator under its drive's position controller, 10 ms:
+    # target position -> measured position (a sine sweep; a square-wave run validates)
+    "camber_lind": ("camber_lind", "camber_lind_val"),
+    # a refinery's sulfur recovery unit, 1 min, operating records (closed loop): MEA gas and
+    # air flows, secondary air, SWS gas and air flows -> H2S, SO2 in the tail gas (split
+    # 2/3 : 1/3)
+    "sru_sulfur": ("sru_sulfur", None),
+    # a laboratory plate heat exchanger, 2 s: hot-water valve command -> outlet temperature
+    # (random levels; a staircase run validates)
+    "phe_valve": ("phe_valve", "phe_valve_val"),
+    # a small research greenhouse, 5 min, under its fan, heater and light rules (closed
+    # loop): lights, fan, heater (on-fractions), outside temperature and light -> inside
+    # temperature and humidity (split 2/3 : 1/3)
+    "greenhouse_mini": ("greenhouse_mini", None),
+    # a stirred flask titrated by an acid pump under a pH controller (closed loop; the log
+    # resampled onto 0.34 s): acid flow -> pH (split 2/3 : 1/3)
+    "ph_flask_acid": ("ph_flask_acid", None),
+    # a quarter-car active suspension rig (Quanser), 2 ms, open loop: road position, actuator
+    # force (both chirps) -> tire and body plate positions (a second chirp run validates)
+    "active_suspension": ("active_suspension_chirp", "active_suspension_chirp_val"),
+}
+
 #: the sweeps read from ``DIR/<name>.npz``: ``--<sweep>-records DIR`` runs a table's records
 #: into ``results/<stem>[_<split>].md`` (the third sweep's tables beside its account,
 #: results/realdata_fresh3.md)
@@ -332,4 +355,5 @@ SWEEPS = {"more": ("MORE", "realdata_more"), "fresh": ("FRESH", "realdata_fresh"
           "fresh24": ("FRESH24", "realdata_fresh24_table"),
           "fresh25": ("FRESH25", "realdata_fresh25_table"),
           "fresh26": ("FRESH26", "realdata_fresh26_table"),
-          "fresh27": ("FRESH27", "realdata_fresh27_table")}
+          "fresh27": ("FRESH27", "realdata_fresh27_table"),
+          "fresh28": ("FRESH28", "realdata_fresh28_table")}
