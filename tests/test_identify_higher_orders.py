@@ -15,6 +15,7 @@ import importlib
 
 import numpy as np
 from scipy import signal
+from test_identify_feedback import _closed_loop
 
 import sysid
 from sysid._progress import Bar
@@ -91,23 +92,13 @@ def test_the_climb_runs_under_feedback_too(monkeypatch):
     closed-loop subspace scores pointed at order 1, its refinement rose past every subspace
     fit and validated at 3.4 %, the order-2 refinement above it at 71.4 %. The climb's start
     (an open-loop subspace fit) is only a start there, as the other refinements' are."""
-    rng = np.random.default_rng(7)
-    n = 600
-    r, e = rng.standard_normal(n), 0.3 * rng.standard_normal(n)
-    A, B, C = np.array([[1.5, -0.7], [1.0, 0.0]]), np.array([1.0, 0.0]), np.array([0.5, 0.3])
-    u, y, x, v = np.zeros(n), np.zeros(n), np.zeros(2), 0.0
-    for t in range(n):  # a resonant plant under proportional feedback
-        v = 0.9 * v + e[t]
-        y[t] = C @ x + v
-        u[t] = r[t] - 0.5 * y[t]
-        x = A @ x + B * u[t]
     seen = []
 
     def spy(board, refine, limit):
         seen.append(board.feedback)
         return climb.higher_orders(board, refine, limit)
     monkeypatch.setattr(core, "higher_orders", spy)
-    res = sysid.identify(sysid.IOData(u=u, y=y), progress=False)
+    res = sysid.identify(_closed_loop(600, 7), progress=False)  # a resonant plant, P loop
     assert res.checks["feedback"].startswith("detected")
     assert seen == [True]  # the climb was asked, on the board of a record with feedback
     assert res.model.is_stable()

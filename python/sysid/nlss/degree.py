@@ -109,36 +109,47 @@ class DegreeChoice:
                 "untried": dict(self.untried)}
 
 
-def runaway_note(choice: DegreeChoice) -> str | None:
-    """What to tell the user when the chosen degree's model ran away (its fit at
-    :data:`FLOOR`) on some held-out blocks where the linear start did not: the median that
-    chose it passes over up to half the blocks, and a model that diverges on a part of its own
-    record is likely to diverge on other data (a sulfur recovery unit's five flows: degree 2
-    chosen at a median of 52.6 % against the linear start's 36.2 %, at the floor on two of
-    five blocks; validation -71 % against the linear start's 39 %). ``None`` when it did not.
+#: what the user can do when the blocks cast doubt on the chosen degree's nonlinear terms
+ADVICE = ("check the model on validation data before trusting its nonlinear terms, or use the "
+          "linear model, fewer terms or a lower order")
+
+
+def caution(choice: DegreeChoice) -> str | None:
+    """What the held-out blocks say against the chosen degree, or ``None``: its linear start
+    simulates them better (it insists, as a larger degree must to be taken), or the chosen
+    model ran away (its fit at :data:`FLOOR`) on some blocks where the linear start did not.
+    The median that chose the degree passes over up to half the blocks, and a model that
+    diverges on a part of its own record is likely to diverge on other data (a sulfur recovery
+    unit's five flows: degree 2 chosen at a median of 52.6 % against the linear start's
+    36.2 %, at the floor on two of five blocks; validation -71 % against the linear start's
+    39 %).
 
     Examples
     --------
-    >>> from sysid.nlss.degree import DegreeChoice, runaway_note
+    >>> from sysid.nlss.degree import DegreeChoice, caution
     >>> c = DegreeChoice(2, {2: 52.6, "linear": 36.2},
     ...                  {2: [-100.0, -100.0, 52.6, 54.9, 55.5], "linear": [36, 35, 41, 31, 39]})
-    >>> runaway_note(c)[:60]
+    >>> caution(c)[:60]
     'the chosen model (degrees 2) ran away on 2 of the 5 blocks o'
-    >>> runaway_note(DegreeChoice(2, {}, {2: [50.0, 60.0], "linear": [40.0, 45.0]})) is None
+    >>> caution(DegreeChoice(2, {}, {2: [50.0, 60.0], "linear": [40.0, 45.0]})) is None
     True
     """
     mine, lin = choice.folds.get(choice.degree), choice.folds.get("linear")
     if not mine or not lin:
         return None
+    t = choice.table
+    if insists(lin, mine):
+        return (f"on blocks of this record held out of the fit its linear start simulates "
+                f"better than the nonlinear model (median {t['linear']:.1f} % against "
+                f"{t[choice.degree]:.1f} %; info['degree_choice']): {ADVICE}")
     bad = sum(1 for a, b in zip(mine, lin) if a <= FLOOR < b)
     if not bad:
         return None
     name = {2: "2", 3: "2-3"}.get(choice.degree, str(choice.degree))
     return (f"the chosen model (degrees {name}) ran away on {bad} of the {len(mine)} blocks of "
             f"this record held out of its fit (simulation fit at {FLOOR:.0f} % or below), where "
-            f"its linear start did not (median {choice.table.get('linear', float('nan')):.1f} "
-            f"%; info['degree_choice']): check it on validation data before trusting its "
-            f"nonlinear terms, or use the linear model, fewer terms or a lower order")
+            f"its linear start did not (median {t.get('linear', float('nan')):.1f} %; "
+            f"info['degree_choice']): {ADVICE}")
 
 
 def too_large(data: IOData, size: Callable[[int], int]) -> dict[int, int]:

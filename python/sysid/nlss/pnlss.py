@@ -588,7 +588,7 @@ def _auto_degree(data: IOData, n: int, kw: dict[str, Any], progress: Any) -> Any
     from .._checks import user_stacklevel
     from ..validation.crossval import fold_count
     from .decoupled import n_parameters
-    from .degree import CANDIDATES, choose_degree, insists, runaway_note, too_large
+    from .degree import CANDIDATES, caution, choose_degree, too_large
 
     def linear(part: IOData) -> PNLSSModel:
         """The part's linear start (as ``pnlss`` fits it), a model without monomials."""
@@ -623,15 +623,7 @@ def _auto_degree(data: IOData, n: int, kw: dict[str, Any], progress: Any) -> Any
                                size)
     finally:
         close()
-    t = choice.table
-    if insists(choice.folds["linear"], choice.folds[choice.degree]):
-        warnings.warn(f"pnlss: on blocks of this record held out of the fit its linear start "
-                      f"simulates better than the nonlinear model (median {t['linear']:.1f} % "
-                      f"against {t[choice.degree]:.1f} %; info['degree_choice']): check the "
-                      f"model on validation data before trusting its nonlinear terms, or use "
-                      f"the linear model, fewer terms or a lower order",
-                      SysidWarning, stacklevel=user_stacklevel())
-    elif (note := runaway_note(choice)) is not None:
+    if (note := caution(choice)) is not None:
         warnings.warn(f"pnlss: {note}", SysidWarning, stacklevel=user_stacklevel())
     return choice
 
