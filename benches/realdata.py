@@ -169,6 +169,11 @@ results/realdata_fresh27.md.
 twenty-eighth sweep's records (a race car's camber actuator under its position servo, a
 refinery's sulfur recovery unit, a plate heat exchanger); sources, SHA-256, how each ``.npz``
 is made and the findings: results/realdata_fresh28.md.
+``--fresh29-records DIR`` (``FRESH29``, results/realdata_fresh29_table[_<split>].md): the
+twenty-ninth sweep's records (a catchment, a micro gas turbine, a wastewater plant's
+aeration, an MR damper, a walking robot's leg, a Li-ion cell, a Peltier cell, a pump, a
+research jet's pitch, an office's CO2, an anaesthetised patient); sources, SHA-256, how each
+``.npz`` is made and the findings: results/realdata_fresh29.md.
 
 Score: the simulation fit on the validation part, NRMSE %, ``100 (1 - |y - yhat| / |y -
 mean(y)|)`` averaged over outputs, with the initial state fitted by least squares on the
@@ -235,6 +240,7 @@ from realdata_records import (  # noqa: F401
     FRESH26,
     FRESH27,
     FRESH28,
+    FRESH29,
     MORE,
     SWEEPS,
 )

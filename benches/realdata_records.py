@@ -327,6 +327,44 @@ FRESH28 = {
     "active_suspension": ("active_suspension_chirp", "active_suspension_chirp_val"),
 }
 
+FRESH29 = {
+    # a catchment (Leaf River above Collins, Mississippi), daily: precipitation, potential
+    # evapotranspiration -> streamflow (water years 1949-1968; 1969-1988 validate)
+    "leaf_river": ("leaf_river", "leaf_river_val"),
+    # a 3 kW micro gas turbine under its own power controller, 1 s: the set-point voltage's
+    # levels -> electrical power (another experiment's levels validate)
+    "micro_gas_turbine": ("micro_gas_turbine_power", "micro_gas_turbine_power_val"),
+    # a municipal wastewater plant's aeration (Tilburg), 15 min, under its ammonium/oxygen
+    # cascade (closed loop): influent flow, five air flows, temperature -> oxygen in three
+    # tanks, nitrate, ammonium (split 2/3 : 1/3)
+    "wwtp_aeration": ("wwtp_tilburg_aeration", None),
+    # a magnetorheological damper on a hydraulic rig, 3 kHz, open loop: displacement, coil
+    # voltage (random) -> force (another random run validates)
+    "mr_damper_wn": ("mr_damper_whitenoise", "mr_damper_whitenoise_val"),
+    # one leg of a compass-gait walking robot swinging from its hip motor, 5 ms, open loop:
+    # motor command -> leg angle (the other leg's run of the same commands validates)
+    "compass_gait_leg": ("compass_gait_leg_swing", "compass_gait_leg_swing_val"),
+    # a Li-ion cell (Panasonic 18650PF) through drive cycles, 0.1 s: current -> terminal
+    # voltage, case temperature (US06 estimates, LA92 validates)
+    "li_ion_18650_drive": ("panasonic_18650pf_drive", "panasonic_18650pf_drive_val"),
+    # a Peltier cell heated by pulses of an extruder heater, 0.25 s: heater on/off -> cell
+    # voltage, hot- and cold-side temperatures (the last three pulses validate)
+    "peltier_pulses": ("peltier_extruder_pulses", "peltier_extruder_pulses_val"),
+    # a water pump in a flow loop (a course rig), 0.1 s, open loop: a two-level random
+    # voltage -> flow (a run at another working point validates)
+    "pump_flow_prbs": ("pump_flow_prbs", "pump_flow_prbs_val"),
+    # a research jet's longitudinal motion in flight (Cessna Citation II), 0.1 s, flown by
+    # hand: elevator -> pitch rate, angle of attack, pitch angle, airspeed (another flight's
+    # manoeuvres validate)
+    "citation_pitch": ("citation_elevator_pitch", "citation_elevator_pitch_val"),
+    # an occupied office's air (a university building), 1 min: ventilation valve opening,
+    # presence flag -> CO2 (the following week validates)
+    "office_co2": ("office_co2_ventilation", "office_co2_ventilation_val"),
+    # a patient under intravenous anaesthesia (VitalDB case 317), 10 s, the anaesthetist in
+    # the loop: propofol, remifentanil infusion rates -> bispectral index (split 2/3 : 1/3)
+    "propofol_bis": ("propofol_bis_vitaldb_all", None),
+}
+
 #: the sweeps read from ``DIR/<name>.npz``: ``--<sweep>-records DIR`` runs a table's records
 #: into ``results/<stem>[_<split>].md`` (the third sweep's tables beside its account,
 #: results/realdata_fresh3.md)
@@ -356,4 +394,5 @@ SWEEPS = {"more": ("MORE", "realdata_more"), "fresh": ("FRESH", "realdata_fresh"
           "fresh25": ("FRESH25", "realdata_fresh25_table"),
           "fresh26": ("FRESH26", "realdata_fresh26_table"),
           "fresh27": ("FRESH27", "realdata_fresh27_table"),
-          "fresh28": ("FRESH28", "realdata_fresh28_table")}
+          "fresh28": ("FRESH28", "realdata_fresh28_table"),
+          "fresh29": ("FRESH29", "realdata_fresh29_table")}
