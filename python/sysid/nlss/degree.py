@@ -145,11 +145,15 @@ def caution(choice: DegreeChoice) -> str | None:
     bad = sum(1 for a, b in zip(mine, lin) if a <= FLOOR < b)
     if not bad:
         return None
-    name = {2: "2", 3: "2-3"}.get(choice.degree, str(choice.degree))
-    return (f"the chosen model (degrees {name}) ran away on {bad} of the {len(mine)} blocks of "
-            f"this record held out of its fit (simulation fit at {FLOOR:.0f} % or below), where "
-            f"its linear start did not (median {t.get('linear', float('nan')):.1f} %; "
-            f"info['degree_choice']): {ADVICE}")
+    return (f"the chosen model (degrees {_degrees(choice.degree)}) ran away on {bad} of the "
+            f"{len(mine)} blocks of this record held out of its fit (simulation fit at "
+            f"{FLOOR:.0f} % or below), where its linear start did not (median "
+            f"{t['linear']:.1f} %; info['degree_choice']): {ADVICE}")
+
+
+def _degrees(k: int) -> str:
+    """How a candidate ``k`` (all degrees ``2..k``) is named: ``"2"``, ``"2-3"``."""
+    return "2" if k == 2 else f"2-{k}"
 
 
 def too_large(data: IOData, size: Callable[[int], int]) -> dict[int, int]:
@@ -237,16 +241,15 @@ def choose_degree(data: IOData, fit: Callable[[IOData, int, Any], Any],
     for k in tried[1:]:  # a larger degree only where the blocks insist on it
         if insists(folds[k], folds[degree]):
             degree = k
-    name = {2: "2", 3: "2-3"}
     reason = (f"held-out simulation fit {table[degree]:.1f} % with degrees "
-              f"{name.get(degree, degree)} (median over {len(pairs)} blocks; "
-              + ", ".join(f"degrees {name.get(k, k)}: {table[k]:.1f} %" for k in tried)
+              f"{_degrees(degree)} (median over {len(pairs)} blocks; "
+              + ", ".join(f"degrees {_degrees(k)}: {table[k]:.1f} %" for k in tried)
               + (f"; the linear start: {table['linear']:.1f} %" if linear is not None else "")
               + ")")
     if degree == tried[0] and max(table[k] for k in tried) > table[degree]:
         reason += ("; the larger degree's gain is within twice the standard error of the "
                    "blocks' differences")
     for k, p in untried.items():
-        reason += (f"; degrees {name.get(k, k)} not tried: {p} parameters for {residuals} "
+        reason += (f"; degrees {_degrees(k)} not tried: {p} parameters for {residuals} "
                    f"residuals (fewer than {PER_PARAMETER} each)")
     return DegreeChoice(degree, table, folds, reason, untried)
