@@ -167,8 +167,9 @@ joint controller); sources, SHA-256, how the ``.npz`` is made and the findings:
 results/realdata_fresh27.md.
 ``--fresh28-records DIR`` (``FRESH28``, results/realdata_fresh28_table[_<split>].md): the
 twenty-eighth sweep's records (a race car's camber actuator under its position servo, a
-refinery's sulfur recovery unit, a plate heat exchanger); sources, SHA-256, how each ``.npz``
-is made and the findings: results/realdata_fresh28.md.
+refinery's sulfur recovery unit, a plate heat exchanger, a greenhouse, a pH flask under its
+controller, an active suspension rig); sources, SHA-256, how each ``.npz`` is made and the
+findings: results/realdata_fresh28.md.
 ``--fresh29-records DIR`` (``FRESH29``, results/realdata_fresh29_table[_<split>].md): the
 twenty-ninth sweep's records (a catchment, a micro gas turbine, a wastewater plant's
 aeration, an MR damper, a walking robot's leg, a Li-ion cell, a Peltier cell, a pump, a
