@@ -116,7 +116,7 @@ FRESH8 = {
 #: results/realdata_fresh9.md)
 FRESH9 = {
     "polydome_summer": ("polydome_summer", None),  # a 600 m2 single-zone building's heat pump
-    # (HVAC), 15 min, summer (cooling, no occupants): heat pump electrical power, outdoor
+    # (HVAC), 15 min, summer (cooling, no occupants): heat pump thermal power, outdoor
     # temperature, solar radiation -> four room temperatures
     "polydome_winter": ("polydome_winter", None),  # the same building in winter (heating)
     "crane_square": ("crane_square", None),  # gantry crane, decimated to 11.6 ms: trolley
