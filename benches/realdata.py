@@ -677,6 +677,20 @@ def _cell(r: dict) -> str:
     return f"{fs} (n={r['order']}){flag}"
 
 
+def goal_met(me: dict, others: list[dict]) -> str:
+    """The issue's goal for identify's row ``me`` against the other tools' rows of the same
+    record: stable and within 0.5 points of the best other, wherever any other reaches a
+    positive fit ("yes"); or so against the stable others ("stable others: yes"); else "no"."""
+    best = max(r["fit"] for r in others)
+    stable = [r["fit"] for r in others if r["max_pole"] < 1]
+    best_s = max(stable) if stable else -np.inf
+    if best <= 0 or (me["max_pole"] < 1 and me["fit"] >= best - 0.5):
+        return "yes"
+    if best_s <= 0 or (me["max_pole"] < 1 and me["fit"] >= best_s - 0.5):
+        return "stable others: yes"
+    return "no"
+
+
 def write_md(rows: list[dict], path: Path, argv: list[str]) -> None:
     tools = list(dict.fromkeys(r["tool"] for r in rows))
     records = list(dict.fromkeys(r["record"] for r in rows))
@@ -707,11 +721,7 @@ def write_md(rows: list[dict], path: Path, argv: list[str]) -> None:
                 return f"{g:+.1f}" if np.isfinite(g) else (
                     "-" if np.isnan(g) else "-inf" if g < 0 else "+inf")
             gap, gap_s = fmt(me["fit"] - best), fmt(me["fit"] - best_s)
-            # the issue's goal: stable and within 0.5 points of the best other, wherever any
-            # other reaches a positive fit
-            ok = best <= 0 or (me["max_pole"] < 1 and me["fit"] >= best - 0.5)
-            met = "yes" if ok else ("stable others: yes" if (
-                best_s <= 0 or (me["max_pole"] < 1 and me["fit"] >= best_s - 0.5)) else "no")
+            met = goal_met(me, others)
             if me.get("error"):  # no others' positive fit makes a refusal meet the goal
                 met = "identify failed"
         lines.append(f"| {rec} | " + " | ".join(cells) + f" | {gap} | {gap_s} | {met} |")
