@@ -5,6 +5,7 @@ code as it stands, against the other tools' rows of the committed tables, and th
     SYSID_SHARED=/work/shared .venv/bin/python benches/realdata_tally.py ROOT RUNS
     .venv/bin/python benches/realdata_tally.py ROOT RUNS --no-run        # tally RUNS only
     .venv/bin/python benches/realdata_tally.py ROOT RUNS --against BASE  # what moved
+    .venv/bin/python benches/realdata_tally.py ROOT RUNS_R --split reversed  # (docstring)
 
 ROOT holds one folder per sweep, named as the sweep's option of ``benches/realdata.py``
 (``more``, ``fresh``, ``fresh2``, ..., the files ``--<sweep>-records`` reads; how each is made:
@@ -14,6 +15,10 @@ folder that is missing is left out and named. The shipped records are read as
 ``realdata.py --no-peers --tools identify`` into ``RUNS/<group>.json`` (kept when it holds
 every record already, so an interrupted run resumes). The other tools' rows are those of the
 committed table of each group (their default split), as last run; only identify is re-run.
+``--split reversed`` estimates on the last part and validates on the first (``realdata.py``'s
+``--split``), on the records of the groups whose committed table has a reversed split
+(``<table>_reversed.json``: the records of one run; a record with a validation run of its
+own keeps it under every split and is not repeated).
 
 The tally prints the goal per group, every miss with its gap, the goal against the effective
 number of held-out blocks identify scores on (``checks["held_out_evidence"]`` is "thin" below
@@ -63,12 +68,29 @@ def identify_rows(path: Path) -> dict[str, dict]:
     return {r["record"]: r for r in json.loads(path.read_text()) if r["tool"] == "identify"}
 
 
-def run(group: str, options: list[str], names, runs: Path) -> None:
-    """identify on the group's records into ``runs/<group>.json`` unless already complete."""
+def table_rows(stem: str, split: str) -> list[dict] | None:
+    """The committed table's rows of ``split`` (``None`` when it has no such table)."""
+    path = HERE / "results" / (f"{stem}.json" if split == "default" else f"{stem}_{split}.json")
+    if not path.exists():
+        return None
+    return [r for r in json.loads(path.read_text()) if r.get("split", "default") == split]
+
+
+def own_validation(group: str, name: str, names: dict) -> bool:
+    """Whether the record has a validation run of its own (kept under every split): a sweep's
+    second file, or the F-16 levels' validation file."""
+    entry = names[name]
+    return name.startswith("f16_") if group == "shipped" else (
+        isinstance(entry, tuple) and len(entry) == 2 and entry[1] is not None)
+
+
+def run(group: str, options: list[str], names, runs: Path, split: str) -> None:
+    """identify on the records ``names`` into ``runs/<group>.json`` unless already there."""
     if set(names) <= set(identify_rows(runs / f"{group}.json")):
         return
-    cmd = [sys.executable, str(HERE / "realdata.py"), *options, "--no-peers", "--tools",
-           "identify", "--out", str(runs / f"{group}.md")]
+    cmd = [sys.executable, str(HERE / "realdata.py"), *options, "--records", *names,
+           "--split", split, "--no-peers", "--tools", "identify",
+           "--out", str(runs / f"{group}.md")]
     print("running", " ".join(cmd[1:]), flush=True)
     subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
 
@@ -90,25 +112,29 @@ def effective_blocks(load) -> float:
     return float(1.0 / np.sum(shares ** 2)) if shares.sum() > 0 else 0.0
 
 
-def tally(root: Path, runs: Path, against: Path | None) -> list[str]:
+def tally(root: Path, runs: Path, against: Path | None, split: str = "default") -> list[str]:
+    R.SPLIT = split
     found, missing = groups(root)
+    tables = {g: table_rows(stem, split) for g, (_, stem, _) in found.items()}
+    missing += [f"{g} (no {split} table)" for g, t in tables.items() if t is None]
+    found = {g: v for g, v in found.items() if tables[g] is not None}
     loads = R.record_loaders(argparse.Namespace(
         unshipped=str(root / "daisy") if "daisy" in found else None,
         **{f"{s}_records": (str(root / s) if s in found else None) for s in RR.SWEEPS}))
-    lines = [f"Groups: {', '.join(found)}" + (f"; missing under ROOT: {', '.join(missing)}"
-                                              if missing else ""), ""]
+    lines = [f"Split: {split}. Groups: {', '.join(found)}"
+             + (f"; left out: {', '.join(missing)}" if missing else ""), ""]
     per, misses, moved, evidence = [], [], [], []
     met_all = n_all = 0
-    for group, (_, stem, names) in found.items():
-        table = json.loads((HERE / "results" / f"{stem}.json").read_text())
-        table = [r for r in table if r.get("split", "default") == "default"]
+    for group, (_, _, names) in found.items():
+        table = tables[group]
         mine = identify_rows(runs / f"{group}.json")
         base = identify_rows(against / f"{group}.json") if against else {
             r["record"]: r for r in table if r["tool"] == "identify"}
         met = n = 0
         for rec in names:
             others = [r for r in table if r["record"] == rec and r["tool"] != "identify"]
-            if rec not in mine or not others:
+            if rec not in mine or not others or (split != "default"
+                                                   and own_validation(group, rec, names)):
                 continue
             me, n = mine[rec], n + 1
             ok = R.goal_met(me, others) != "no" and not me.get("error")
@@ -130,10 +156,10 @@ def tally(root: Path, runs: Path, against: Path | None) -> list[str]:
               "| record | identify | best (stable) other | gap | identify's choice |",
               "|---|---|---|---|---|"]
     for gap, group, rec, me, best in sorted(misses, key=lambda m: m[0]):
-        flag = "" if me["max_pole"] < 1 else " (unstable)"
+        flag = " (refused)" if me.get("error") else "" if me["max_pole"] < 1 else " (unstable)"
         lines.append(f"| {group}/{rec} | {me['fit']:.1f}{flag} | {best['fit']:.1f} "
                      f"({best['tool']}, n={best['order']}) | {gap:+.1f} | "
-                     f"{me.get('choice', '')[:60]} |")
+                     f"{(me.get('choice') or me.get('error', ''))[:60]} |")
     lines += ["", "| effective held-out blocks | records | goal met |", "|---|---|---|"]
     for lo, hi in ((0.0, 2.0), (2.0, 3.0), (3.0, 4.0), (4.0, np.inf)):
         s = [ok for e, ok in evidence if lo <= e < hi]
@@ -155,15 +181,22 @@ def main() -> None:
     ap.add_argument("--against", type=Path, default=None,
                     help="another RUNS folder: list what moved from it (a change weighed)")
     ap.add_argument("--out", type=Path, default=None, help="also write the tally here (.md)")
+    ap.add_argument("--split", choices=("default", "reversed"), default="default",
+                    help="realdata.py's split (reversed: the groups with a reversed table)")
     args = ap.parse_args()
     if not args.root.is_dir():
         sys.exit(f"ROOT {args.root} is not a folder (one folder per sweep: see the docstring)")
     args.runs.mkdir(parents=True, exist_ok=True)
     if not args.no_run:
         os.environ.setdefault("PYTHONPATH", str(HERE.parent / "python"))
-        for group, (options, _, names) in groups(args.root)[0].items():
-            run(group, options, names, args.runs)
-    lines = tally(args.root, args.runs, args.against)
+        for group, (options, stem, names) in groups(args.root)[0].items():
+            rows = table_rows(stem, args.split)
+            if rows is not None:
+                run(group, options, [n for n in names if any(r["record"] == n for r in rows)
+                                     and not (args.split != "default"
+                                              and own_validation(group, n, names))],
+                    args.runs, args.split)
+    lines = tally(args.root, args.runs, args.against, args.split)
     print("\n".join(lines))
     if args.out:
         args.out.write_text("\n".join(lines) + "\n")
