@@ -30,7 +30,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import subprocess
 import sys
 import warnings
@@ -84,6 +83,13 @@ def own_validation(group: str, name: str, names: dict) -> bool:
         isinstance(entry, tuple) and len(entry) == 2 and entry[1] is not None)
 
 
+def scored(group: str, names: dict, rows: list[dict], split: str) -> list[str]:
+    """The group's records the tally runs and scores: those of its committed table, without
+    (on another split) the ones that keep their validation run."""
+    return [n for n in names if any(r["record"] == n for r in rows)
+            and not (split != "default" and own_validation(group, n, names))]
+
+
 def run(group: str, options: list[str], names, runs: Path, split: str) -> None:
     """identify on the records ``names`` into ``runs/<group>.json`` unless already there."""
     if set(names) <= set(identify_rows(runs / f"{group}.json")):
@@ -97,19 +103,18 @@ def run(group: str, options: list[str], names, runs: Path, split: str) -> None:
 
 def effective_blocks(load) -> float:
     """The effective number of identify's held-out blocks on the record's estimation part (by
-    each block's share of the output variation, as identify counts it)."""
+    each block's share of the output variation: :meth:`sysid.identify.board.Board.
+    effective_blocks` on the blocks identify holds out)."""
     import sysid
+    from sysid._progress import Bar
     from sysid.data.offsets import remove_means
-    from sysid.identify.board import informative
-    from sysid.validation.crossval import record_folds, variation
+    from sysid.identify.board import Board, informative
+    from sysid.validation.crossval import record_folds
 
     (ue, ye), _ = load()
     centred = remove_means(sysid.IOData(u=ue, y=ye))[0]
     parts, _ = informative(record_folds(centred), centred)
-    w = np.array([variation(held) for _, held in parts])
-    total = w.sum(0)
-    shares = np.mean(w / np.where(total > 0, total, 1.0), axis=1)
-    return float(1.0 / np.sum(shares ** 2)) if shares.sum() > 0 else 0.0
+    return Board(parts, Bar(None, "tally", enabled=False)).effective_blocks()
 
 
 def tally(root: Path, runs: Path, against: Path | None, split: str = "default") -> list[str]:
@@ -131,10 +136,9 @@ def tally(root: Path, runs: Path, against: Path | None, split: str = "default") 
         base = identify_rows(against / f"{group}.json") if against else {
             r["record"]: r for r in table if r["tool"] == "identify"}
         met = n = 0
-        for rec in names:
+        for rec in scored(group, names, table, split):
             others = [r for r in table if r["record"] == rec and r["tool"] != "identify"]
-            if rec not in mine or not others or (split != "default"
-                                                   and own_validation(group, rec, names)):
+            if rec not in mine or not others:
                 continue
             me, n = mine[rec], n + 1
             ok = R.goal_met(me, others) != "no" and not me.get("error")
@@ -192,14 +196,11 @@ def main() -> None:
         sys.exit(f"ROOT {args.root} is not a folder (one folder per sweep: see the docstring)")
     args.runs.mkdir(parents=True, exist_ok=True)
     if not args.no_run:
-        os.environ.setdefault("PYTHONPATH", str(HERE.parent / "python"))
         for group, (options, stem, names) in groups(args.root)[0].items():
             rows = table_rows(stem, args.split)
             if rows is not None:
-                run(group, options, [n for n in names if any(r["record"] == n for r in rows)
-                                     and not (args.split != "default"
-                                              and own_validation(group, n, names))],
-                    args.runs, args.split)
+                run(group, options, scored(group, names, rows, args.split), args.runs,
+                    args.split)
     lines = tally(args.root, args.runs, args.against, args.split)
     print("\n".join(lines))
     if args.out:
