@@ -7,6 +7,7 @@ README (dryer 1:500 / 501:1000, robot arm 1:800 / 801:1024, winding first 2/3 / 
 from __future__ import annotations
 
 import re
+import time
 import warnings
 
 import numpy as np
@@ -311,6 +312,22 @@ def test_identify_time_budget_keeps_the_subspace_sweep_and_says_it_stopped():
     assert "pem" in full and "pem" not in fams
     with pytest.raises(sysid.errors.DataError, match="time_budget"):
         sysid.identify(est, time_budget=-1.0)
+
+
+def test_identify_by_default_reads_no_clock(monkeypatch):
+    # the default search is bounded in work, not seconds: on a busy machine (here a clock
+    # that runs 1000 s per reading) it scores the same candidates and returns the same model
+    # (with a 60 s CPU budget by default a 2 x 28 vibration record returned an unstable
+    # subspace model under load and a stable refinement when idle)
+    est, _ = daisy_split("dryer")
+    idle = quiet(sysid.identify, est, progress=False)
+    ticks = iter(range(10**9))
+    monkeypatch.setattr(time, "process_time", lambda: 1000.0 * next(ticks))
+    busy = quiet(sysid.identify, est, progress=False)
+    assert not busy.out_of_time and busy.choice == idle.choice
+    assert [r["held_out_fit"] for r in busy.leaderboard] == [
+        r["held_out_fit"] for r in idle.leaderboard]
+    assert "pem" in {r["family"] for r in busy.leaderboard}
 
 
 def test_identified_model_is_validated_like_its_state_space_model():
