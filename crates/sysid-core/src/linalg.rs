@@ -43,6 +43,89 @@ pub fn qr_r_in_place(a: MatMut<'_, f64>) {
     );
 }
 
+/// The `R` factor of the thin QR of `a` (`min(rows, cols) x cols`, upper triangular), on the
+/// calling thread (as faer's `qr().thin_R()`, whose threads move the last bits above a few
+/// hundred rows; see [`crate::optim::small_par`]).
+///
+/// ```
+/// use faer::mat;
+/// use sysid_core::linalg::thin_r_seq;
+/// let r = thin_r_seq(mat![[3.0, 1.0], [4.0, 2.0], [0.0, 0.0]].as_ref());
+/// assert_eq!((r.nrows(), r.ncols(), r[(1, 0)]), (2, 2, 0.0));
+/// assert!((r[(0, 0)].abs() - 5.0).abs() < 1e-14);
+/// ```
+pub fn thin_r_seq(a: MatRef<'_, f64>) -> Mat<f64> {
+    let mut q = a.to_owned();
+    qr_r_in_place(q.as_mut());
+    let k = a.nrows().min(a.ncols());
+    Mat::from_fn(k, a.ncols(), |i, j| if i <= j { q[(i, j)] } else { 0.0 })
+}
+
+/// The thin `Q` of the Householder QR of `a` (at least as many rows as columns), as faer's
+/// `qr().compute_thin_Q()` but on the calling thread (the same bits on any number of
+/// threads; see [`crate::optim::small_par`]).
+///
+/// ```
+/// use faer::mat;
+/// use sysid_core::linalg::thin_q_seq;
+/// let q = thin_q_seq(mat![[3.0], [4.0]].as_ref());
+/// assert!((q[(0, 0)].abs() - 0.6).abs() < 1e-15 && (q[(1, 0)].abs() - 0.8).abs() < 1e-15);
+/// ```
+pub fn thin_q_seq(a: MatRef<'_, f64>) -> Mat<f64> {
+    use faer::dyn_stack::{MemBuffer, MemStack};
+    use faer::linalg::{householder as hh, qr::no_pivoting::factor};
+    let (m, n) = a.shape();
+    if n == 0 {
+        return Mat::zeros(m, 0);
+    }
+    let par = Par::Seq;
+    let bs = factor::recommended_block_size::<f64>(m, n);
+    let mut qr = a.to_owned();
+    let mut coeff = Mat::<f64>::zeros(bs, n);
+    let scratch = factor::qr_in_place_scratch::<f64>(m, n, bs, par, Default::default());
+    factor::qr_in_place(
+        qr.as_mut(),
+        coeff.as_mut(),
+        par,
+        MemStack::new(&mut MemBuffer::new(scratch)),
+        Default::default(),
+    );
+    // the Householder basis, unit lower trapezoidal (faer's split of the packed factors)
+    let basis = Mat::from_fn(m, n, |i, j| match i.cmp(&j) {
+        std::cmp::Ordering::Greater => qr[(i, j)],
+        std::cmp::Ordering::Equal => 1.0,
+        std::cmp::Ordering::Less => 0.0,
+    });
+    let mut q = Mat::<f64>::identity(m, n);
+    let scratch =
+        hh::apply_block_householder_sequence_on_the_left_in_place_scratch::<f64>(m, bs, n);
+    hh::apply_block_householder_sequence_on_the_left_in_place_with_conj(
+        basis.as_ref(),
+        coeff.as_ref(),
+        faer::Conj::No,
+        q.as_mut(),
+        par,
+        MemStack::new(&mut MemBuffer::new(scratch)),
+    );
+    q
+}
+
+/// Makes faer's own methods (`svd`, `qr`, `eigen`, `llt().solve`, products by `*`: they read
+/// faer's global parallelism) run on the calling thread, so that every result of the crate
+/// is the same on any number of threads: above a few hundred rows faer's decompositions and
+/// triangular solves split their work by thread and the last bits move with the count (a
+/// `pem` search on a 2 x 28 record of order 20 ended at another cost with two threads than
+/// with one). The crate's large products and factorisations keep rayon's pool (they give the
+/// same bits on any count). Call once, before any work (the Python module does at import).
+///
+/// ```
+/// sysid_core::linalg::reproducible_threads();
+/// assert!(matches!(faer::get_global_parallelism(), faer::Par::Seq));
+/// ```
+pub fn reproducible_threads() {
+    faer::set_global_parallelism(Par::Seq);
+}
+
 /// Cholesky factor (lower) of a symmetric positive definite matrix, on the calling thread
 /// (deterministic for any thread count, as [`qr_r_in_place`]); `None` when a pivot is not
 /// positive.
@@ -167,9 +250,10 @@ pub fn sym_eigenvalues_seq(a: MatRef<'_, f64>) -> Result<Vec<f64>> {
 
 /// The real eigendecomposition of faer's `eigen`/`eigenvalues` (Schur form, then the
 /// eigenvectors when asked): the eigenvalues' real and imaginary parts and the real basis
-/// (a complex pair `j, j + 1` as the columns `re, im`), with [`crate::optim::small_par`]: on
-/// the calling thread for the small matrices of every iterate (faer's own call wakes the
-/// thread pool, which cost more than the decomposition; the result is the same).
+/// (a complex pair `j, j + 1` as the columns `re, im`), on the calling thread: faer's own call
+/// wakes the thread pool (which cost more than the decomposition of the small matrices of
+/// every iterate) and, above a few hundred rows, splits its work by thread, which moves the
+/// last bits (see [`crate::optim::small_par`]).
 #[allow(clippy::type_complexity)]
 fn evd_real(
     a: MatRef<'_, f64>,
@@ -178,7 +262,7 @@ fn evd_real(
     use faer::dyn_stack::{MemBuffer, MemStack};
     use faer::linalg::evd::{self, ComputeEigenvectors};
     let n = a.nrows();
-    let par = crate::optim::small_par(n, n);
+    let par = Par::Seq; // the same bits on any number of threads (optim::small_par)
     let (mut re, mut im) = (faer::diag::Diag::zeros(n), faer::diag::Diag::zeros(n));
     let mut u = vectors.then(|| Mat::<f64>::zeros(n, n));
     let right = if vectors {
@@ -285,7 +369,7 @@ pub(crate) fn mul<T: faer::traits::ComplexField>(a: MatRef<'_, T>, b: MatRef<'_,
         .saturating_mul(a.ncols())
         .saturating_mul(b.ncols());
     let par = if work >= 1 << 22 {
-        faer::get_global_parallelism()
+        Par::rayon(0)
     } else {
         Par::Seq
     };

@@ -38,6 +38,9 @@ mod names;
 #[pymodule]
 fn _sysid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     search::note_main_thread();
+    // every result the same on any number of threads (faer's own decompositions and solves
+    // split their work by thread above a few hundred rows)
+    sysid_core::linalg::reproducible_threads();
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     hankel::register(m)?;
     simulate::register(m)?;

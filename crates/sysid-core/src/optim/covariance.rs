@@ -103,7 +103,7 @@ pub fn covariance(gauss_newton: MatRef<'_, f64>, scale: f64, rtol: f64) -> Resul
     // Unidentifiable directions in parameter space: H D^-1 v = 0, orthonormalised.
     let mut null = Mat::from_fn(p, drop.len(), |i, j| u[(i, drop[j])] / d[i]);
     if null.ncols() > 0 {
-        null = thin_q(&null);
+        null = crate::linalg::thin_q_seq(null.as_ref());
     }
     Ok(Covariance {
         covariance: cov,
@@ -115,46 +115,6 @@ pub fn covariance(gauss_newton: MatRef<'_, f64>, scale: f64, rtol: f64) -> Resul
             lmax / lmin
         },
     })
-}
-
-/// The thin Q of the Householder QR of `a` (at least as many rows as columns), as faer's
-/// `qr().compute_thin_Q()` but with [`super::small_par`]: on the calling thread for the small
-/// matrices of most models (waking the thread pool cost more than the factorisation).
-fn thin_q(a: &Mat<f64>) -> Mat<f64> {
-    use faer::dyn_stack::{MemBuffer, MemStack};
-    use faer::linalg::{householder as hh, qr::no_pivoting::factor};
-    let (m, n) = a.shape();
-    let par = super::small_par(m, n);
-    let bs = factor::recommended_block_size::<f64>(m, n);
-    let mut qr = a.clone();
-    let mut coeff = Mat::<f64>::zeros(bs, n);
-    let scratch = factor::qr_in_place_scratch::<f64>(m, n, bs, par, Default::default());
-    let stack = &mut MemBuffer::new(scratch);
-    factor::qr_in_place(
-        qr.as_mut(),
-        coeff.as_mut(),
-        par,
-        MemStack::new(stack),
-        Default::default(),
-    );
-    // the Householder basis, unit lower trapezoidal (faer's split of the packed factors)
-    let basis = Mat::from_fn(m, n, |i, j| match i.cmp(&j) {
-        std::cmp::Ordering::Greater => qr[(i, j)],
-        std::cmp::Ordering::Equal => 1.0,
-        std::cmp::Ordering::Less => 0.0,
-    });
-    let mut q = Mat::<f64>::identity(m, n);
-    let scratch =
-        hh::apply_block_householder_sequence_on_the_left_in_place_scratch::<f64>(m, bs, n);
-    hh::apply_block_householder_sequence_on_the_left_in_place_with_conj(
-        basis.as_ref(),
-        coeff.as_ref(),
-        faer::Conj::No,
-        q.as_mut(),
-        par,
-        MemStack::new(&mut MemBuffer::new(scratch)),
-    );
-    q
 }
 
 /// The residual scale `s = 2 V / (n_residuals - rank)` that multiplies `(J^T W J)^+` when the

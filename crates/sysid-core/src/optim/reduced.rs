@@ -288,7 +288,7 @@ impl Reduced {
         if ds.ncols() == 0 || !ds.norm_max().is_finite() {
             return None;
         }
-        Some(ds.qr().compute_thin_Q())
+        Some(crate::linalg::thin_q_seq(ds.as_ref()))
     }
 
     /// Sets the scaled reduced gradient from the full gradient `g` (also used to reuse the

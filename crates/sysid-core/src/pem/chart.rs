@@ -118,7 +118,8 @@ pub(super) fn to_start_basis(prob: &Predictor<'_>, md: &Modal, mut r: PemResult)
     r.covariance.covariance = symmetric(both(&inv, &r.covariance.covariance));
     let u = &r.covariance.unidentifiable;
     if u.ncols() > 0 && u.nrows() == prob.p {
-        r.covariance.unidentifiable = prob.modal_mt_cols(&inv, u).qr().compute_thin_Q();
+        r.covariance.unidentifiable =
+            crate::linalg::thin_q_seq(prob.modal_mt_cols(&inv, u).as_ref());
     }
     r
 }

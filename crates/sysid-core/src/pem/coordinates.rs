@@ -166,7 +166,7 @@ fn left_svd(tan: &Mat<f64>, vectors: bool) -> Result<(Mat<f64>, Vec<f64>)> {
     use faer::linalg::svd::{self, ComputeSvdVectors};
     let (rows, cols) = tan.shape();
     let size = rows.min(cols);
-    let par = crate::optim::small_par(rows, cols);
+    let par = faer::Par::Seq; // the same bits on any number of threads (optim::small_par)
     let mut u = Mat::<f64>::zeros(
         if vectors { rows } else { 0 },
         if vectors { rows } else { 0 },

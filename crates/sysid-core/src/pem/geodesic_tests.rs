@@ -116,16 +116,20 @@ fn accelerated_search_is_identical_for_any_thread_count() {
     );
     o.reweight = false;
     o.optim.geodesic = true;
-    let run = |par: faer::Par| {
-        faer::set_global_parallelism(par);
-        pem(&start, None, &views, &o, &mut |_| {
-            crate::optim::Flow::Continue
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            pem(&start, None, &views, &o, &mut |_| {
+                crate::optim::Flow::Continue
+            })
+            .unwrap()
         })
-        .unwrap()
     };
-    let serial = run(faer::Par::Seq);
-    let parallel = run(faer::Par::rayon(2));
-    faer::set_global_parallelism(faer::Par::rayon(0));
+    let serial = run(1);
+    let parallel = run(2);
     assert_eq!(serial.theta, parallel.theta);
     assert_eq!(serial.solution.geodesic, parallel.solution.geodesic);
     let sol = &serial.solution;

@@ -501,13 +501,15 @@ fn structured_evaluation_is_identical_for_any_thread_count() {
     let mut pr = Predictor::new(&sys, Some(k.as_ref()), &views, &o).unwrap();
     let th = pr.pack(&sys, k.as_ref(), &[vec![0.0; n]]);
     pr.reweight_at(&th).unwrap();
-    let run = |pr: &mut Predictor, par: faer::Par| {
-        faer::set_global_parallelism(par);
-        pr.evaluate(&th, true).unwrap()
+    let mut run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| pr.evaluate(&th, true).unwrap())
     };
-    let serial = run(&mut pr, faer::Par::Seq);
-    let parallel = run(&mut pr, faer::Par::rayon(2));
-    faer::set_global_parallelism(faer::Par::rayon(0));
+    let serial = run(1);
+    let parallel = run(2);
     assert_eq!(serial.gradient, parallel.gradient);
     assert!(serial.gauss_newton == parallel.gauss_newton);
 }

@@ -233,7 +233,7 @@ impl ArxCompressor {
         let s = Mat::from_fn(k, p + 1, |row, c| {
             r[(row, if c < p { cols[c] } else { target })]
         });
-        let rs = s.qr().thin_R().to_owned();
+        let rs = crate::linalg::thin_r_seq(s.as_ref());
         Ok(Mat::from_fn(p + 1, p + 1, |a, b| {
             if a <= b && a < rs.nrows() {
                 rs[(a, b)]
@@ -310,8 +310,7 @@ impl ArxCompressor {
                 }
             }
         }
-        let qr = s.qr();
-        let rs = qr.thin_R();
+        let rs = crate::linalg::thin_r_seq(s.as_ref());
         // Rank check of the regression.
         let dmax = (0..p).map(|d| rs[(d, d)].abs()).fold(0.0, f64::max);
         for d in 0..p {

@@ -148,9 +148,7 @@ type Caller = &'static str;
 
 fn check_rank(r: &Mat<f64>, what: Caller) -> Result<()> {
     let p = r.nrows();
-    let s = r
-        .singular_values()
-        .map_err(|e| SysidError::numerical(what, format!("{e:?}")))?;
+    let (s, _, _) = crate::linalg::svd_seq(what, r.as_ref(), false, false)?;
     let full = s.last().is_some_and(|&l| l > 1e-12 * s[0]);
     if !full {
         let rank = s.iter().filter(|&&v| v > 1e-12 * s[0]).count();

@@ -168,16 +168,8 @@ pub(crate) fn solve_s(
 fn eigen_factor(prior: MatRef<'_, f64>) -> Result<Mat<f64>> {
     let p = prior.nrows();
     let sym = Mat::from_fn(p, p, |i, j| 0.5 * (prior[(i, j)] + prior[(j, i)]));
-    let eig = sym.self_adjoint_eigen(Side::Lower).map_err(|e| {
-        SysidError::numerical(
-            "regularised ARX (prior eigendecomposition)",
-            format!("{e:?}"),
-        )
-    })?;
-    let w = eig.S().column_vector();
-    Ok(Mat::from_fn(p, p, |i, j| {
-        eig.U()[(i, j)] * w[j].max(0.0).sqrt()
-    }))
+    let (u, w) = crate::optim::symmetric_eigen(&sym, "regularised ARX (prior eigendecomposition)")?;
+    Ok(Mat::from_fn(p, p, |i, j| u[(i, j)] * w[j].max(0.0).sqrt()))
 }
 
 /// [`solve_s`] without forming `S`: from the eigen-factor of `P` and the SVD of `R1 L`.
@@ -190,12 +182,18 @@ pub(crate) fn spectral_s(
 ) -> Option<SolvedS> {
     let p = r1.nrows();
     let l = eigen_factor(prior).ok()?;
-    let svd = mul(r1, l.as_ref()).svd().ok()?;
-    let (u, sv) = (svd.U(), svd.S().column_vector());
+    let (sv, u, _) = crate::linalg::svd_seq(
+        "regularised ARX (SVD)",
+        mul(r1, l.as_ref()).as_ref(),
+        true,
+        false,
+    )
+    .ok()?;
+    let u = u?;
     let d: Vec<f64> = (0..p).map(|i| sv[i] * sv[i] + sigma2).collect();
     let logdet = d.iter().map(|x| x.ln()).sum();
     let ur = u.transpose() * r;
-    let a = u * Mat::from_fn(p, 1, |i, _| ur[(i, 0)] / d[i]);
+    let a = &u * Mat::from_fn(p, 1, |i, _| ur[(i, 0)] / d[i]);
     // G from T = U^T R1 (rows along the near-null directions stay at round-off of R1, not
     // of R1^T S^-1 R1, whose entries reach 1 / sigma2 and cancel)
     let gradient = gradient.then(|| {
@@ -260,13 +258,14 @@ pub fn regularized_solve(
     let rho = summary[(p, p)];
     let l = eigen_factor(prior)?;
     let m = mul(r1, l.as_ref());
-    let svd = m
-        .thin_svd()
-        .map_err(|e| SysidError::numerical("regularised ARX (SVD)", format!("{e:?}")))?;
-    let s = svd.S().column_vector();
-    let lv = mul(l.as_ref(), svd.V());
-    let ur = svd.U().transpose() * r;
-    let k = s.nrows();
+    let (s, su, sv) = crate::linalg::svd_seq("regularised ARX (SVD)", m.as_ref(), true, true)?;
+    let (su, sv) = (
+        su.unwrap_or_else(|| Mat::zeros(0, 0)),
+        sv.unwrap_or_else(|| Mat::zeros(0, 0)),
+    );
+    let lv = mul(l.as_ref(), sv.as_ref());
+    let ur = su.transpose() * r;
+    let k = s.len();
     // a direction the data do not determine (a zero singular value, or one at round-off of
     // the largest: noise-free data, or more parameters than the data support) keeps the
     // prior's value 0 and its whole variance when there is no penalty to decide it

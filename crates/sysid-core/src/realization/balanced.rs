@@ -17,7 +17,7 @@
 use crate::error::{Result, SysidError};
 use crate::lyapunov::solve_discrete_lyapunov;
 use crate::model::StateSpace;
-use faer::{Mat, MatRef, Side};
+use faer::{Mat, MatRef};
 
 /// A balanced (possibly truncated) model with its transformation.
 #[derive(Debug, Clone)]
@@ -57,11 +57,7 @@ pub fn gramians(sys: &StateSpace) -> Result<(Mat<f64>, Mat<f64>)> {
 /// eigenvalues from round-off are set to zero).
 fn psd_factor(w: MatRef<'_, f64>) -> Result<Mat<f64>> {
     let n = w.nrows();
-    let e = w
-        .self_adjoint_eigen(Side::Lower)
-        .map_err(|e| SysidError::numerical("eigendecomposition of a gramian", format!("{e:?}")))?;
-    let s = e.S().column_vector();
-    let u = e.U();
+    let (u, s) = crate::optim::symmetric_eigen(&w.to_owned(), "eigendecomposition of a gramian")?;
     Ok(Mat::from_fn(n, n, |i, j| u[(i, j)] * s[j].max(0.0).sqrt()))
 }
 
@@ -78,16 +74,13 @@ fn square_root(sys: &StateSpace) -> Result<SquareRoot> {
     let lc = psd_factor(wc.as_ref())?;
     let lo = psd_factor(wo.as_ref())?;
     let prod = lo.transpose() * &lc;
-    let svd = prod
-        .thin_svd()
-        .map_err(|e| SysidError::numerical("SVD in balancing", format!("{e:?}")))?;
-    let s = svd.S().column_vector().iter().copied().collect();
+    let (s, u, v) = crate::linalg::svd_seq("SVD in balancing", prod.as_ref(), true, true)?;
     Ok(SquareRoot {
         lc,
         lo,
-        u: svd.U().to_owned(),
+        u: u.unwrap_or_else(|| Mat::zeros(0, 0)),
         s,
-        v: svd.V().to_owned(),
+        v: v.unwrap_or_else(|| Mat::zeros(0, 0)),
     })
 }
 

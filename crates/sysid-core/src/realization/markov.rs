@@ -259,7 +259,7 @@ fn accumulate(
                 }
             }
             rows += t1 - t0;
-            r = block.qr().thin_R().to_owned();
+            r = crate::linalg::thin_r_seq(block.as_ref());
             t0 = t1;
         }
     }
@@ -401,14 +401,16 @@ fn tc_spectrum(
     // B's columns span tens of decades, and B^T B's small eigenvalues (round-off of the
     // largest, 1e-16 of it) then decided the marginal likelihood: a 200-lag fit of a pole at
     // 0.99 chose a scale of 1e11 and returned Markov parameters 70 times the true peak
-    let svd = bm
-        .thin_svd()
-        .map_err(|e| SysidError::numerical("TC regularisation (SVD)", format!("{e:?}")))?;
-    let sv = svd.S().column_vector();
-    let d = sv.nrows();
+    let (sv, su, sv_v) =
+        crate::linalg::svd_seq("TC regularisation (SVD)", bm.as_ref(), true, true)?;
+    let (su, sv_v) = (
+        su.unwrap_or_else(|| Mat::zeros(0, 0)),
+        sv_v.unwrap_or_else(|| Mat::zeros(0, 0)),
+    );
+    let d = sv.len();
     let s: Vec<f64> = (0..d).map(|i| sv[i] * sv[i]).collect();
-    let q = svd.V().to_owned();
-    let ur = svd.U().transpose() * r12;
+    let q = sv_v;
+    let ur = su.transpose() * r12;
     let z = Mat::from_fn(d, r12.ncols(), |i, j| sv[i] * ur[(i, j)]);
     Ok(TcSpectrum { lf, q, s, z })
 }

@@ -306,14 +306,11 @@ pub(crate) struct HankelSvd {
 }
 
 pub(crate) fn hankel_svd(h0: MatRef<'_, f64>) -> Result<HankelSvd> {
-    let svd = h0
-        .thin_svd()
-        .map_err(|e| SysidError::numerical("SVD of the Hankel matrix", format!("{e:?}")))?;
-    let s: Vec<f64> = svd.S().column_vector().iter().copied().collect();
+    let (s, u, v) = crate::linalg::svd_seq("SVD of the Hankel matrix", h0, true, true)?;
     Ok(HankelSvd {
-        u: svd.U().to_owned(),
+        u: u.unwrap_or_else(|| Mat::zeros(0, 0)),
         s,
-        v: svd.V().to_owned(),
+        v: v.unwrap_or_else(|| Mat::zeros(0, 0)),
     })
 }
 

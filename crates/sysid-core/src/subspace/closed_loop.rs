@@ -433,10 +433,8 @@ impl ClosedLoop {
                 (w, target)
             }
         };
-        let svd = svd_target
-            .thin_svd()
-            .map_err(|e| SysidError::numerical("closed-loop weighted SVD", format!("{e:?}")))?;
-        let s: Vec<f64> = svd.S().column_vector().iter().copied().collect();
+        let (s, su, _) =
+            crate::linalg::svd_seq("closed-loop weighted SVD", svd_target.as_ref(), true, false)?;
         let smax = s.first().copied().unwrap_or(0.0);
         if !smax.is_finite() || smax <= 0.0 {
             return Err(SysidError::numerical(
@@ -451,7 +449,7 @@ impl ClosedLoop {
             varx,
             rows,
             w,
-            u: svd.U().to_owned(),
+            u: su.unwrap_or_else(|| Mat::zeros(0, 0)),
             s,
             rank,
         })

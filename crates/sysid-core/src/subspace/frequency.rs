@@ -457,10 +457,7 @@ fn output_subspace(
 ) -> Result<(Mat<f64>, Vec<f64>, usize)> {
     let lfac = lq_lower(z);
     let l22 = lfac.as_ref().submatrix(rows_u, rows_u, rows, rows);
-    let svd = l22
-        .thin_svd()
-        .map_err(|e| SysidError::numerical("frequency-domain SVD", format!("{e:?}")))?;
-    let sv: Vec<f64> = svd.S().column_vector().iter().copied().collect();
+    let (sv, su, _) = crate::linalg::svd_seq("frequency-domain SVD", l22, true, false)?;
     let smax = sv.first().copied().unwrap_or(0.0);
     if !smax.is_finite() || smax <= 0.0 {
         return Err(SysidError::numerical(
@@ -469,7 +466,7 @@ fn output_subspace(
         ));
     }
     let rank = sv.iter().filter(|&&x| x > 1e-12 * smax).count();
-    Ok((svd.U().to_owned(), sv, rank))
+    Ok((su.unwrap_or_else(|| Mat::zeros(0, 0)), sv, rank))
 }
 
 #[cfg(test)]

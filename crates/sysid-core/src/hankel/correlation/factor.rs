@@ -6,7 +6,7 @@ use super::CorrelationSums;
 use crate::error::{Result, SysidError};
 use crate::hankel::{Block, FactorSource, HankelFactor};
 use crate::linalg::{cholesky_lower_seq, lq_lower, lq_lower_rank_one};
-use faer::{Mat, Side};
+use faer::Mat;
 
 impl CorrelationSums {
     /// Closes the open experiment and factors the Gram matrix of the raw data.
@@ -100,14 +100,10 @@ impl CorrelationSums {
                 (la, src, rel, true)
             }
             None => {
-                let evd = ga.self_adjoint_eigen(Side::Lower).map_err(|e| {
-                    SysidError::numerical(
-                        "correlation compressor (eigendecomposition)",
-                        format!("{e:?}"),
-                    )
-                })?;
-                let s = evd.S().column_vector();
-                let v = evd.U();
+                let (v, s) = crate::optim::symmetric_eigen(
+                    &ga,
+                    "correlation compressor (eigendecomposition)",
+                )?;
                 let clipped = (0..=k).filter(|&i| s[i] < 0.0).count();
                 let f = Mat::from_fn(k + 1, k + 1, |i, j| v[(i, j)] * s[j].max(0.0).sqrt());
                 (
