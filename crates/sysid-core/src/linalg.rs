@@ -115,7 +115,7 @@ pub fn thin_q_seq(a: MatRef<'_, f64>) -> Mat<f64> {
 /// is the same on any number of threads: above a few hundred rows faer's decompositions and
 /// triangular solves split their work by thread and the last bits move with the count (a
 /// `pem` search on a 2 x 28 record of order 20 ended at another cost with two threads than
-/// with one). The crate's large products and factorisations keep rayon's pool (they give the
+/// with one). The crate's large products and LU factorisations keep rayon's pool (they give the
 /// same bits on any count). Call once, before any work (the Python module does at import).
 ///
 /// ```

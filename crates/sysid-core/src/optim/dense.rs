@@ -6,7 +6,7 @@ use crate::error::{Result, SysidError};
 use faer::linalg::matmul::triangular::{self as tri, BlockStructure};
 use faer::{Accum, Mat, MatMut, MatRef, Par};
 
-/// The parallelism of a dense product, Cholesky or LU factorisation of a `rows x cols`
+/// The parallelism of a dense product or LU factorisation of a `rows x cols`
 /// matrix, `O(rows cols^2)`: the calling thread below `2^22` multiply-adds (every iterate of
 /// a small problem; waking the pool costs more than the work), rayon's pool above. Only for
 /// those: they give the same bits on any number of threads (each entry's sums run in one
