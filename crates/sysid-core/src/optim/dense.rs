@@ -136,6 +136,17 @@ pub(crate) fn mirror_lower(h: &mut Mat<f64>) {
     }
 }
 
+/// `f` run inside a rayon pool of `threads` threads (tests of results that must not depend on
+/// the count).
+#[cfg(test)]
+pub(crate) fn on_threads<R: Send>(threads: usize, f: impl FnOnce() -> R + Send) -> R {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("a rayon pool for the test")
+        .install(f)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -198,11 +209,7 @@ mod tests {
         let j = rnd(2400, 600, 1);
         let a = rnd(600, 600, 2);
         let run = |threads: usize| {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap();
-            pool.install(|| {
+            on_threads(threads, || {
                 let mut g = Mat::<f64>::zeros(600, 600);
                 gram_add(g.as_mut(), j.as_ref(), small_par(2400, 600));
                 mirror_lower(&mut g);

@@ -117,11 +117,7 @@ fn accelerated_search_is_identical_for_any_thread_count() {
     o.reweight = false;
     o.optim.geodesic = true;
     let run = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        pool.install(|| {
+        crate::optim::dense::on_threads(threads, || {
             pem(&start, None, &views, &o, &mut |_| {
                 crate::optim::Flow::Continue
             })

@@ -502,11 +502,7 @@ fn structured_evaluation_is_identical_for_any_thread_count() {
     let th = pr.pack(&sys, k.as_ref(), &[vec![0.0; n]]);
     pr.reweight_at(&th).unwrap();
     let mut run = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        pool.install(|| pr.evaluate(&th, true).unwrap())
+        crate::optim::dense::on_threads(threads, || pr.evaluate(&th, true).unwrap())
     };
     let serial = run(1);
     let parallel = run(2);
