@@ -166,6 +166,41 @@ pub fn mul_seq(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64> {
     out
 }
 
+/// [`svd_seq`] with the left singular vectors: `(s, U)`, `U` of `min(rows, cols)` columns.
+///
+/// ```
+/// use faer::mat;
+/// let (s, u) = sysid_core::linalg::svd_left_seq("doc", mat![[3.0, 0.0], [0.0, 2.0]].as_ref())
+///     .unwrap();
+/// assert_eq!((s, u.shape()), (vec![3.0, 2.0], (2, 2)));
+/// ```
+pub fn svd_left_seq(step: &'static str, a: MatRef<'_, f64>) -> Result<(Vec<f64>, Mat<f64>)> {
+    let (s, u, _) = svd_seq(step, a, true, false)?;
+    Ok((s, u.unwrap_or_else(|| Mat::zeros(a.nrows(), 0))))
+}
+
+/// [`svd_seq`] with both sets of singular vectors: `(s, U, V)`, each of `min(rows, cols)`
+/// columns.
+///
+/// ```
+/// use faer::mat;
+/// let (s, u, v) =
+///     sysid_core::linalg::svd_both_seq("doc", mat![[0.0, 2.0, 0.0]].as_ref()).unwrap();
+/// assert_eq!((s, u.shape(), v.shape()), (vec![2.0], (1, 1), (3, 1)));
+/// ```
+#[allow(clippy::type_complexity)]
+pub fn svd_both_seq(
+    step: &'static str,
+    a: MatRef<'_, f64>,
+) -> Result<(Vec<f64>, Mat<f64>, Mat<f64>)> {
+    let (s, u, v) = svd_seq(step, a, true, true)?;
+    Ok((
+        s,
+        u.unwrap_or_else(|| Mat::zeros(a.nrows(), 0)),
+        v.unwrap_or_else(|| Mat::zeros(a.ncols(), 0)),
+    ))
+}
+
 /// Thin SVD on the calling thread: the singular values (largest first) and, when asked,
 /// the first `min(rows, cols)` left and right singular vectors. `step` names the caller in
 /// the error when the SVD does not converge.
@@ -287,7 +322,7 @@ fn evd_real(
 }
 
 /// Eigenvalues and eigenvectors (columns) of a square matrix, as faer's `eigen` (a complex
-/// pair's vectors conjugate), on the calling thread for small matrices ([`evd_real`]).
+/// pair's vectors conjugate), on the calling thread ([`evd_real`]).
 #[allow(clippy::type_complexity)]
 pub(crate) fn eigen(
     a: MatRef<'_, f64>,
@@ -377,8 +412,7 @@ pub(crate) fn mul<T: faer::traits::ComplexField>(a: MatRef<'_, T>, b: MatRef<'_,
     out
 }
 
-/// Eigenvalues of a square matrix as `(re, im)` pairs (on the calling thread for small
-/// matrices, [`evd_real`]).
+/// Eigenvalues of a square matrix as `(re, im)` pairs, on the calling thread ([`evd_real`]).
 pub fn eigenvalues(a: MatRef<'_, f64>) -> Result<Vec<(f64, f64)>> {
     if a.nrows() == 0 {
         return Ok(Vec::new());
@@ -455,11 +489,7 @@ pub fn pinv(a: MatRef<'_, f64>, rtol: f64) -> Result<Mat<f64>> {
     if m == 0 || n == 0 {
         return Ok(Mat::zeros(n, m));
     }
-    let (s, u, v) = svd_seq("pseudo-inverse (SVD)", a, true, true)?;
-    let (u, v) = (
-        u.unwrap_or_else(|| Mat::zeros(m, 0)),
-        v.unwrap_or_else(|| Mat::zeros(n, 0)),
-    );
+    let (s, u, v) = svd_both_seq("pseudo-inverse (SVD)", a)?;
     let cut = rtol * s[0];
     let r = s.iter().filter(|&&x| x > cut && x > 0.0).count();
     let mut vs = v.subcols(0, r).to_owned();

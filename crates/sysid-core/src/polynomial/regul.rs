@@ -182,14 +182,8 @@ pub(crate) fn spectral_s(
 ) -> Option<SolvedS> {
     let p = r1.nrows();
     let l = eigen_factor(prior).ok()?;
-    let (sv, u, _) = crate::linalg::svd_seq(
-        "regularised ARX (SVD)",
-        mul(r1, l.as_ref()).as_ref(),
-        true,
-        false,
-    )
-    .ok()?;
-    let u = u?;
+    let (sv, u) =
+        crate::linalg::svd_left_seq("regularised ARX (SVD)", mul(r1, l.as_ref()).as_ref()).ok()?;
     let d: Vec<f64> = (0..p).map(|i| sv[i] * sv[i] + sigma2).collect();
     let logdet = d.iter().map(|x| x.ln()).sum();
     let ur = u.transpose() * r;
@@ -258,11 +252,7 @@ pub fn regularized_solve(
     let rho = summary[(p, p)];
     let l = eigen_factor(prior)?;
     let m = mul(r1, l.as_ref());
-    let (s, su, sv) = crate::linalg::svd_seq("regularised ARX (SVD)", m.as_ref(), true, true)?;
-    let (su, sv) = (
-        su.unwrap_or_else(|| Mat::zeros(0, 0)),
-        sv.unwrap_or_else(|| Mat::zeros(0, 0)),
-    );
+    let (s, su, sv) = crate::linalg::svd_both_seq("regularised ARX (SVD)", m.as_ref())?;
     let lv = mul(l.as_ref(), sv.as_ref());
     let ur = su.transpose() * r;
     let k = s.len();

@@ -74,14 +74,8 @@ fn square_root(sys: &StateSpace) -> Result<SquareRoot> {
     let lc = psd_factor(wc.as_ref())?;
     let lo = psd_factor(wo.as_ref())?;
     let prod = lo.transpose() * &lc;
-    let (s, u, v) = crate::linalg::svd_seq("SVD in balancing", prod.as_ref(), true, true)?;
-    Ok(SquareRoot {
-        lc,
-        lo,
-        u: u.unwrap_or_else(|| Mat::zeros(0, 0)),
-        s,
-        v: v.unwrap_or_else(|| Mat::zeros(0, 0)),
-    })
+    let (s, u, v) = crate::linalg::svd_both_seq("SVD in balancing", prod.as_ref())?;
+    Ok(SquareRoot { lc, lo, u, s, v })
 }
 
 /// Hankel singular values of a stable model, decreasing.

@@ -401,16 +401,10 @@ fn tc_spectrum(
     // B's columns span tens of decades, and B^T B's small eigenvalues (round-off of the
     // largest, 1e-16 of it) then decided the marginal likelihood: a 200-lag fit of a pole at
     // 0.99 chose a scale of 1e11 and returned Markov parameters 70 times the true peak
-    let (sv, su, sv_v) =
-        crate::linalg::svd_seq("TC regularisation (SVD)", bm.as_ref(), true, true)?;
-    let (su, sv_v) = (
-        su.unwrap_or_else(|| Mat::zeros(0, 0)),
-        sv_v.unwrap_or_else(|| Mat::zeros(0, 0)),
-    );
+    let (sv, u, q) = crate::linalg::svd_both_seq("TC regularisation (SVD)", bm.as_ref())?;
     let d = sv.len();
     let s: Vec<f64> = (0..d).map(|i| sv[i] * sv[i]).collect();
-    let q = sv_v;
-    let ur = su.transpose() * r12;
+    let ur = u.transpose() * r12;
     let z = Mat::from_fn(d, r12.ncols(), |i, j| sv[i] * ur[(i, j)]);
     Ok(TcSpectrum { lf, q, s, z })
 }

@@ -306,12 +306,8 @@ pub(crate) struct HankelSvd {
 }
 
 pub(crate) fn hankel_svd(h0: MatRef<'_, f64>) -> Result<HankelSvd> {
-    let (s, u, v) = crate::linalg::svd_seq("SVD of the Hankel matrix", h0, true, true)?;
-    Ok(HankelSvd {
-        u: u.unwrap_or_else(|| Mat::zeros(0, 0)),
-        s,
-        v: v.unwrap_or_else(|| Mat::zeros(0, 0)),
-    })
+    let (s, u, v) = crate::linalg::svd_both_seq("SVD of the Hankel matrix", h0)?;
+    Ok(HankelSvd { u, s, v })
 }
 
 /// Checks the chosen order against the singular values (positive, within the Hankel size).

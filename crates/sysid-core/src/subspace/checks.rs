@@ -7,7 +7,7 @@
 
 use crate::error::Result;
 use crate::hankel::HankelFactor;
-use crate::linalg::{mul_seq, qr_r_in_place, rsolve_lstsq, svd_seq, sym_eigenvalues_seq};
+use crate::linalg::{mul_seq, qr_r_in_place, rsolve_lstsq, svd_left_seq, sym_eigenvalues_seq};
 use faer::{Mat, MatRef, Par};
 
 /// Residual sums of squares of the feedback test's two regressions (see
@@ -192,8 +192,7 @@ pub fn row_regression(
     if well_conditioned(rxx.as_ref(), rtol) {
         return Ok((outside, r));
     }
-    let (s, u, _) = svd_seq("feedback test (SVD)", rxx.as_ref(), true, false)?;
-    let u = u.unwrap_or_else(|| Mat::zeros(r, 0));
+    let (s, u) = svd_left_seq("feedback test (SVD)", rxx.as_ref())?;
     let smax = s.first().copied().unwrap_or(0.0);
     let rank = s.iter().filter(|&&v| v > rtol * smax).count();
     let w = a.as_ref().submatrix(0, r, r, nt);

@@ -433,8 +433,7 @@ impl ClosedLoop {
                 (w, target)
             }
         };
-        let (s, su, _) =
-            crate::linalg::svd_seq("closed-loop weighted SVD", svd_target.as_ref(), true, false)?;
+        let (s, u) = crate::linalg::svd_left_seq("closed-loop weighted SVD", svd_target.as_ref())?;
         let smax = s.first().copied().unwrap_or(0.0);
         if !smax.is_finite() || smax <= 0.0 {
             return Err(SysidError::numerical(
@@ -449,7 +448,7 @@ impl ClosedLoop {
             varx,
             rows,
             w,
-            u: su.unwrap_or_else(|| Mat::zeros(0, 0)),
+            u,
             s,
             rank,
         })

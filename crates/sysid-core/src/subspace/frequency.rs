@@ -457,7 +457,7 @@ fn output_subspace(
 ) -> Result<(Mat<f64>, Vec<f64>, usize)> {
     let lfac = lq_lower(z);
     let l22 = lfac.as_ref().submatrix(rows_u, rows_u, rows, rows);
-    let (sv, su, _) = crate::linalg::svd_seq("frequency-domain SVD", l22, true, false)?;
+    let (sv, u) = crate::linalg::svd_left_seq("frequency-domain SVD", l22)?;
     let smax = sv.first().copied().unwrap_or(0.0);
     if !smax.is_finite() || smax <= 0.0 {
         return Err(SysidError::numerical(
@@ -466,7 +466,7 @@ fn output_subspace(
         ));
     }
     let rank = sv.iter().filter(|&&x| x > 1e-12 * smax).count();
-    Ok((su.unwrap_or_else(|| Mat::zeros(0, 0)), sv, rank))
+    Ok((u, sv, rank))
 }
 
 #[cfg(test)]

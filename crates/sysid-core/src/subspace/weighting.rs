@@ -6,7 +6,7 @@
 use super::Method;
 use crate::error::{Result, SysidError};
 use crate::hankel::{Block, HankelFactor};
-use crate::linalg::{lq_lower, mul_seq, pinv, svd_seq};
+use crate::linalg::{lq_lower, mul_seq, pinv, svd_left_seq, svd_seq};
 use faer::{Mat, MatRef};
 
 /// Singular values and the basis that yields the extended observability matrix.
@@ -118,7 +118,7 @@ pub fn weighted_svd(factor: &HankelFactor, method: Method) -> Result<Weighted> {
         ));
     }
     // the left singular vectors only (the right ones are never used)
-    let (s, u, _) = svd_seq("weighted SVD", m.as_ref(), true, false)?;
+    let (s, u) = svd_left_seq("weighted SVD", m.as_ref())?;
     let smax = s.first().copied().unwrap_or(0.0);
     if smax.is_nan() || smax <= 0.0 || !smax.is_finite() {
         return Err(SysidError::numerical(
@@ -128,7 +128,6 @@ pub fn weighted_svd(factor: &HankelFactor, method: Method) -> Result<Weighted> {
         ));
     }
     let rank = s.iter().filter(|&&x| x > 1e-12 * smax).count();
-    let u = u.unwrap_or_else(|| Mat::zeros(m.nrows(), 0));
     let basis = match transform {
         Some(t) => mul_seq(t.as_ref(), u.as_ref()),
         None => u,
