@@ -168,6 +168,51 @@ def spike_report(data: IOData) -> str | None:
     return "; ".join(found) or None
 
 
+def repair_isolated_spikes(data: IOData) -> tuple[IOData, dict[str, list[int]]]:
+    """``data`` with the outputs' isolated spikes (:func:`spike_report`'s conservative test)
+    replaced by the mean of their two neighbours, and the samples repaired per output
+    (counted over the experiments laid end to end, as :func:`spike_report` counts them).
+
+    :func:`sysid.identify`'s repair: a single sample far from both neighbours and far out
+    in the record is a logger glitch that every least-squares fit bends to (one such sample
+    of 170 standard deviations takes a 99.9 % record to 79 %). A spike within two samples
+    of one in an input (an impulse the output answers through a direct term) is kept.
+    Up to three passes, so that a glitch of two samples goes too.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.data.preprocessing import repair_isolated_spikes
+    >>> u = np.random.default_rng(0).standard_normal(400)
+    >>> y = np.convolve(u, [0.5, 0.3, 0.2])[:400]; y[50] += 30.0
+    >>> fixed, where = repair_isolated_spikes(sysid.IOData(u=u, y=y))
+    >>> where, bool(abs(fixed.y[50, 0] - (y[49] + y[51]) / 2) < 1e-12)
+    ({'y0': [50]}, True)
+    """
+    where: dict[str, list[int]] = {}
+    exps, start = [], 0
+    for e in data._exps:
+        u, y = e.u.copy(), e.y.copy()
+        near = set()  # samples within two of an input's spike
+        if u.shape[0] >= 5:
+            for k in range(u.shape[1]):
+                for t in _spikes(u[:, k]):
+                    near.update(range(t - 2, t + 3))
+        for j, name in enumerate(data.output_names):
+            for _ in range(3):
+                hits = [int(t) for t in _spikes(y[:, j]) if t not in near] if len(y) >= 5 else []
+                if not hits:
+                    break
+                for t in hits:
+                    y[t, j] = 0.5 * (y[t - 1, j] + y[t + 1, j])
+                where.setdefault(name, []).extend(start + t for t in hits)
+        exps.append(_Exp(u, y, e.t0, e.tu, e.ty))
+        start += y.shape[0]
+    if not where:
+        return data, where
+    return data._derive(exps), {k: sorted(v) for k, v in where.items()}
+
+
 def despike(
     data: IOData,
     *,

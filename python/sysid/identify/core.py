@@ -85,7 +85,7 @@ from .._progress import Bar, show
 from .._threads import one_blas_thread
 from ..data.iodata import IOData
 from ..data.offsets import remove_means
-from ..data.preprocessing import spike_report
+from ..data.preprocessing import repair_isolated_spikes, spike_report
 from ..errors import (
     DataError,
     ExcitationError,
@@ -161,11 +161,6 @@ def _checks(data: IOData) -> tuple[dict[str, Any], bool, int | None]:
             f"which repeat with it), not how it does on another input; validate on a record "
             f"of another excitation (another multisine realisation or amplitude), or fit "
             f"the averaged periods (sysid.ssest(data, order, periods='auto'))")
-    spikes = spike_report(data)
-    if spikes:
-        checks["outliers"] = (f"{spikes}: every fit bends to them; repair them first "
-                              f"(sysid.despike(data)) or cut them out")
-        warnings.warn(f"identify: {checks['outliers']}", SysidWarning, stacklevel=user_stacklevel())
     return checks, feedback, counted
 
 
@@ -182,6 +177,7 @@ def identify(
     enforce_stability: bool | None = None,
     time_budget: float | None = None,
     progress: bool | None = None,
+    repair_spikes: bool = True,
 ) -> IdentifyResult:
     """Identify a linear model from a record with no settings: offsets, checks, candidate
     families and orders, chosen on data held out from the estimation record.
@@ -229,6 +225,14 @@ def identify(
         A progress bar over the candidates (default: only when stderr is a terminal).
         Ctrl-C stops the search (``KeyboardInterrupt``, as every other computation: a script
         or a batch must not carry on with a half-chosen model).
+    repair_spikes : bool
+        Replace the outputs' isolated spikes (a single sample far from both neighbours and
+        far out in the record: a logger glitch, which every fit bends to) by the mean of
+        their neighbours before anything is fitted, except next to a spike of an input
+        (:func:`sysid.data.preprocessing.repair_isolated_spikes`); ``result.checks
+        ["outliers"]`` and a warning name the samples. The test is conservative: it finds
+        none in the 121 real records of ``benches/realdata_tally.py``. ``False``: fit the
+        record as it is (then the check only warns).
 
     Returns
     -------
@@ -285,8 +289,24 @@ def identify(
     validation = validation_record(validation, data)  # before the search, not after it
     if steps is not None and not staircase:  # process models fitted from rest, by BIC
         return identify_step_test(data, validation, steps, t0, max_order)
+    spiked, where = spike_report(data), {}
+    if spiked and repair_spikes:  # before the means: a glitch moves them too
+        data, where = repair_isolated_spikes(data)
+    if where:
+        spiked = "; ".join(
+            f"output {k}: {len(v)} isolated spike(s) at sample(s) "
+            f"{', '.join(map(str, v[:8]))}{' ...' if len(v) > 8 else ''}" for k, v in where.items())
+        spiked += (" replaced by the mean of their neighbours before the fit (logger glitches "
+                   "that every fit would bend to); to fit them as recorded: "
+                   "sysid.identify(data, repair_spikes=False)")
+    elif spiked:  # kept (asked to, or next to an input's spike)
+        spiked += (": every fit bends to them; repair them first (sysid.despike(data)) or cut "
+                   "them out")
     centred, mu, my = remove_means(data)
     checks, feedback, counted = _checks(centred)
+    if spiked:
+        checks["outliers"] = spiked
+        warnings.warn(f"identify: {spiked}", SysidWarning, stacklevel=user_stacklevel())
     # six significant digits: rounding to decimals printed data in micro-units as [0.0]
     checks["offsets"] = (f"input means [{', '.join(f'{v:.6g}' for v in mu)}], output means "
                          f"[{', '.join(f'{v:.6g}' for v in my)}] removed (kept with the model)")
