@@ -139,6 +139,20 @@ def test_an_output_spike_that_answers_an_input_impulse_is_kept():
     assert where == {} and fixed is data
 
 
+def test_a_glitch_of_several_samples_is_reported_not_smeared():
+    # the mean of a multi-sample glitch's neighbours would spread it: a run of drop-out
+    # values is left as recorded, with the advice to repair it (despike's dropout=)
+    u, y = _resonant(600, 7)
+    y[300:305] = -9999.0
+    from sysid.data.preprocessing import repair_isolated_spikes
+    fixed, where = repair_isolated_spikes(sysid.IOData(u=u, y=y))
+    assert where == {} and np.array_equal(fixed.y[:, 0], y)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = sysid.identify(sysid.IOData(u=u, y=y), refine=False)
+    assert "despike" in res.checks["outliers"] and "replaced" not in res.checks["outliers"]
+
+
 def test_no_spike_report_on_clean_records_of_several_kinds():
     # white noise, a lightly damped response to steps, a saturating step response: no
     # false alarm (steep but smooth changes are not spikes)

@@ -175,9 +175,11 @@ def repair_isolated_spikes(data: IOData) -> tuple[IOData, dict[str, list[int]]]:
 
     :func:`sysid.identify`'s repair: a single sample far from both neighbours and far out
     in the record is a logger glitch that every least-squares fit bends to (one such sample
-    of 170 standard deviations takes a 99.9 % record to 79 %). A spike within two samples
-    of one in an input (an impulse the output answers through a direct term) is kept.
-    Up to three passes, so that a glitch of two samples goes too.
+    of 170 standard deviations takes a 99.9 % record to 79 %). Only a single sample is
+    repaired: where the test still finds a spike within three samples once it is replaced
+    (a glitch of several samples, a run of drop-out values), nothing there is changed (the
+    mean of a glitch's neighbours would spread it), and neither is a spike within two
+    samples of one in an input (an impulse the output answers through a direct term).
 
     Examples
     --------
@@ -188,6 +190,9 @@ def repair_isolated_spikes(data: IOData) -> tuple[IOData, dict[str, list[int]]]:
     >>> fixed, where = repair_isolated_spikes(sysid.IOData(u=u, y=y))
     >>> where, bool(abs(fixed.y[50, 0] - (y[49] + y[51]) / 2) < 1e-12)
     ({'y0': [50]}, True)
+    >>> y[200:203] = -9999.0  # a run of drop-out values: left alone
+    >>> repair_isolated_spikes(sysid.IOData(u=u, y=y))[1]
+    {'y0': [50]}
     """
     where: dict[str, list[int]] = {}
     exps, start = [], 0
@@ -199,18 +204,24 @@ def repair_isolated_spikes(data: IOData) -> tuple[IOData, dict[str, list[int]]]:
                 for t in _spikes(u[:, k]):
                     near.update(range(t - 2, t + 3))
         for j, name in enumerate(data.output_names):
-            for _ in range(3):
-                hits = [int(t) for t in _spikes(y[:, j]) if t not in near] if len(y) >= 5 else []
-                if not hits:
-                    break
-                for t in hits:
-                    y[t, j] = 0.5 * (y[t - 1, j] + y[t + 1, j])
-                where.setdefault(name, []).extend(start + t for t in hits)
+            x = y[:, j]
+            hits = [int(t) for t in _spikes(x) if t not in near] if len(x) >= 5 else []
+            if not hits:
+                continue
+            trial = x.copy()
+            for t in hits:
+                trial[t] = 0.5 * (x[t - 1] + x[t + 1])
+            left = _spikes(trial)  # a spike still near one: not a single sample
+            done = [t for t in hits if not np.any(np.abs(left - t) <= 3)]
+            for t in done:
+                y[t, j] = trial[t]
+            if done:
+                where.setdefault(name, []).extend(start + t for t in done)
         exps.append(_Exp(u, y, e.t0, e.tu, e.ty))
         start += y.shape[0]
     if not where:
         return data, where
-    return data._derive(exps), {k: sorted(v) for k, v in where.items()}
+    return data._derive(exps), where
 
 
 def despike(

@@ -229,7 +229,8 @@ def identify(
         Replace the outputs' isolated spikes (a single sample far from both neighbours and
         far out in the record: a logger glitch, which every fit bends to) by the mean of
         their neighbours before anything is fitted, except next to a spike of an input
-        (:func:`sysid.data.preprocessing.repair_isolated_spikes`); ``result.checks
+        and where the glitch spans several samples (then it is only reported;
+        :func:`sysid.data.preprocessing.repair_isolated_spikes`); ``result.checks
         ["outliers"]`` and a warning name the samples. The test is conservative: it finds
         none in the 121 real records of ``benches/realdata_tally.py``. ``False``: fit the
         record as it is (then the check only warns).
