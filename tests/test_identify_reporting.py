@@ -151,6 +151,11 @@ def test_a_glitch_of_several_samples_is_reported_not_smeared():
         warnings.simplefilter("ignore")
         res = sysid.identify(sysid.IOData(u=u, y=y), refine=False)
     assert "despike" in res.checks["outliers"] and "replaced" not in res.checks["outliers"]
+    y[100] += 20 * np.std(y[:300])  # and one single glitch: repaired, the run still named
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        both = sysid.identify(sysid.IOData(u=u, y=y), refine=False).checks["outliers"]
+    assert "at sample(s) 100 replaced" in both and "left in the record" in both, both
 
 
 def test_no_spike_report_on_clean_records_of_several_kinds():

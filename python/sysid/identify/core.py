@@ -300,7 +300,11 @@ def identify(
         spiked += (" replaced by the mean of their neighbours before the fit (logger glitches "
                    "that every fit would bend to); to fit them as recorded: "
                    "sysid.identify(data, repair_spikes=False)")
-    elif spiked:  # kept (asked to, or next to an input's spike)
+        rest = spike_report(data)  # glitches of several samples, or next to an input's
+        if rest:
+            spiked += (f"; left in the record: {rest}: every fit bends to them; repair them "
+                       f"first (sysid.despike(data)) or cut them out")
+    elif spiked:  # kept: asked to, several samples, or next to an input's spike
         spiked += (": every fit bends to them; repair them first (sysid.despike(data)) or cut "
                    "them out")
     centred, mu, my = remove_means(data)
