@@ -125,6 +125,17 @@ def test_isolated_spikes_in_the_output_are_repaired_reported_and_warned():
     assert "despike" in kept.checks["outliers"]
 
 
+def test_spikes_in_the_validation_record_are_named_beside_its_fit():
+    # the validation data are only reported on, as recorded: a glitch there lowers the
+    # reported fit, which said nothing about it
+    u, y = _resonant(600, 1)
+    uv, yv = _resonant(600, 12)
+    yv[200] += 20 * yv.std()
+    res = sysid.identify(sysid.IOData(u=u, y=y), sysid.IOData(u=uv, y=yv), refine=False)
+    assert "1 isolated spike(s) (first at sample 200)" in res.checks["validation_outliers"]
+    assert "outliers" not in res.checks
+
+
 def test_an_output_spike_that_answers_an_input_impulse_is_kept():
     # impulses on the input through a direct term: the output's spikes are the response
     rng = np.random.default_rng(4)

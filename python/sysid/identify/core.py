@@ -479,6 +479,10 @@ def identify(
     result_model = IdentifiedModel(model, mu, my)
     if validation is not None and (note := coverage_note(data, validation)) is not None:
         checks["validation"] = note
+    if validation is not None and (glitch := spike_report(validation)) is not None:
+        checks["validation_outliers"] = (
+            f"the validation record has {glitch}: its reported fit counts them, as recorded "
+            f"(sysid.despike(validation) to score the model without them)")
     out = IdentifyResult(result_model, rows, desc, checks, reported_fit(result_model, validation),
                          time.perf_counter() - t0, interrupted)
     out.out_of_time = board.out_of_time
