@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 import sysid
+from sysid.data.preprocessing import repair_isolated_spikes, spike_report
 from sysid.identify.result import IdentifiedModel, IdentifyResult
 
 matplotlib.use("Agg")
@@ -101,9 +102,9 @@ def _resonant(n, seed, u=None):
 
 
 def test_isolated_spikes_in_the_output_are_repaired_reported_and_warned():
-    # logger glitches: identify fitted the record as it was and only warned (validation fit
-    # 79 % where the clean record gives 99.9 % on a sweep's probe); it now replaces each by
-    # the mean of its neighbours before anything is fitted, and says so
+    # logger glitches: identify fitted the record as it was and only warned (on a probe, one
+    # glitch took the validation fit from 99.9 % to 79 %); it now replaces each by the mean
+    # of its neighbours before anything is fitted, and says so
     u, y = _resonant(600, 1)
     clean = y.copy()
     y[[100, 333, 500]] += 20 * y.std()
@@ -144,7 +145,6 @@ def test_an_output_spike_that_answers_an_input_impulse_is_kept():
     true = sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]], [[2.0]])
     y = true.simulate(u)[:, 0] + 0.01 * rng.standard_normal(800)
     data = sysid.IOData(u=u, y=y)
-    from sysid.data.preprocessing import repair_isolated_spikes, spike_report
     assert spike_report(data) is not None  # the output alone looks spiked
     fixed, where = repair_isolated_spikes(data)
     assert where == {} and fixed is data
@@ -155,7 +155,6 @@ def test_a_glitch_of_several_samples_is_reported_not_smeared():
     # values is left as recorded, with the advice to repair it (despike's dropout=)
     u, y = _resonant(600, 7)
     y[300:305] = -9999.0
-    from sysid.data.preprocessing import repair_isolated_spikes
     fixed, where = repair_isolated_spikes(sysid.IOData(u=u, y=y))
     assert where == {} and np.array_equal(fixed.y[:, 0], y)
     with warnings.catch_warnings():
