@@ -198,23 +198,21 @@ def repair_isolated_spikes(data: IOData) -> tuple[IOData, dict[str, list[int]]]:
     exps, start = [], 0
     for e in data._exps:
         u, y = e.u.copy(), e.y.copy()
-        near = set()  # samples within two of an input's spike
-        if u.shape[0] >= 5:
-            for k in range(u.shape[1]):
-                for t in _spikes(u[:, k]):
-                    near.update(range(t - 2, t + 3))
+        near: set[int] | None = None  # samples within two of an input's spike, when needed
         for j, name in enumerate(data.output_names):
             x = y[:, j]
-            hits = [int(t) for t in _spikes(x) if t not in near] if len(x) >= 5 else []
+            hits = _spikes(x) if len(x) >= 5 else []
+            if len(hits) and near is None:
+                near = {int(t) + d for k in range(u.shape[1]) for t in _spikes(u[:, k])
+                        for d in range(-2, 3)} if u.shape[0] >= 5 else set()
+            hits = [int(t) for t in hits if int(t) not in (near or set())]
             if not hits:
                 continue
             trial = x.copy()
-            for t in hits:
-                trial[t] = 0.5 * (x[t - 1] + x[t + 1])
+            trial[hits] = 0.5 * (x[np.array(hits) - 1] + x[np.array(hits) + 1])
             left = _spikes(trial)  # a spike still near one: not a single sample
             done = [t for t in hits if not np.any(np.abs(left - t) <= 3)]
-            for t in done:
-                y[t, j] = trial[t]
+            y[done, j] = trial[done]
             if done:
                 where.setdefault(name, []).extend(start + t for t in done)
         exps.append(_Exp(u, y, e.t0, e.tu, e.ty))

@@ -290,23 +290,20 @@ def identify(
     validation = validation_record(validation, data)  # before the search, not after it
     if steps is not None and not staircase:  # process models fitted from rest, by BIC
         return identify_step_test(data, validation, steps, t0, max_order)
-    spiked, where = spike_report(data), {}
-    if spiked and repair_spikes:  # before the means: a glitch moves them too
+    where: dict[str, list[int]] = {}
+    if repair_spikes:  # before the means: a glitch moves them too
         data, where = repair_isolated_spikes(data)
-    if where:
-        spiked = "; ".join(
-            f"output {k}: {len(v)} isolated spike(s) at sample(s) "
-            f"{', '.join(map(str, v[:8]))}{' ...' if len(v) > 8 else ''}" for k, v in where.items())
-        spiked += (" replaced by the mean of their neighbours before the fit (logger glitches "
-                   "that every fit would bend to); to fit them as recorded: "
-                   "sysid.identify(data, repair_spikes=False)")
-        rest = spike_report(data)  # glitches of several samples, or next to an input's
-        if rest:
-            spiked += (f"; left in the record: {rest}: every fit bends to them; repair them "
-                       f"first (sysid.despike(data)) or cut them out")
-    elif spiked:  # kept: asked to, several samples, or next to an input's spike
-        spiked += (": every fit bends to them; repair them first (sysid.despike(data)) or cut "
-                   "them out")
+    left = spike_report(data)  # kept: asked to, several samples, or next to an input's spike
+    notes = [f"output {k}: {len(v)} isolated spike(s) at sample(s) "
+             f"{', '.join(map(str, v[:8]))}{' ...' if len(v) > 8 else ''}"
+             for k, v in where.items()]
+    spiked = "; ".join(notes) + (" replaced by the mean of their neighbours before the fit "
+                                 "(logger glitches that every fit would bend to); to fit them "
+                                 "as recorded: sysid.identify(data, repair_spikes=False)"
+                                 if notes else "")
+    if left:
+        spiked += (("; left in the record: " if notes else "") + f"{left}: every fit bends to "
+                   "them; repair them first (sysid.despike(data)) or cut them out")
     centred, mu, my = remove_means(data)
     checks, feedback, counted = _checks(centred)
     if spiked:
