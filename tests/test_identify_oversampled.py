@@ -75,6 +75,36 @@ def test_identify_decimates_an_oversampled_record_and_returns_the_model_at_its_r
     assert np.min(np.abs(freqs - 1.5)) < 0.05
 
 
+def _pendulum_record(seed, amp):
+    # a short record: a lightly damped 0.45 Hz pendulum logged at 20 Hz for 60 s while a
+    # chirp sweeps it from 0.09 to 0.7 Hz (a student rig's identification run)
+    dt = 0.05
+    wn, z = 2 * np.pi * 0.45, 0.05
+    ct = sysid.ContinuousStateSpace([[0.0, 1.0], [-wn ** 2, -2 * z * wn]], [[0.0], [wn ** 2]],
+                                    [[1.0, 0.0]])
+    t = np.arange(1200) * dt
+    u = amp * np.sin(2 * np.pi * (0.09 + 0.61 * t / t[-1] / 2) * t)
+    y = sysid.c2d(ct, dt).simulate(u) + 0.01 * np.random.default_rng(seed).standard_normal(
+        (1200, 1))
+    return sysid.IOData(u=u, y=y, dt=dt)
+
+
+def test_a_short_record_twice_oversampled_is_decimated_too():
+    # 1 200 samples whose input needs half the rate: every subspace window refuses them
+    # (rank 11 of 20). Decimated by 2 they keep 600 samples; with at least 1 000 required
+    # after decimation identify refused the record outright
+    est, val = _pendulum_record(0, 1.0), _pendulum_record(1, 0.7)
+    assert decimation_factor(est) == 2
+    centred = sysid.IOData(u=est.u - est.u.mean(0), y=est.y - est.y.mean(0), dt=est.dt)
+    with pytest.raises(sysid.ExcitationError, match="sysid.decimate"):
+        sysid.n4sid(centred, 2)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = sysid.identify(est, validation=val, progress=False)
+    assert res.model.statespace.info["decimated"]["q"] == 2 and res.model.dt == est.dt
+    assert res.validation_fit > 95.0 and res.model.is_stable()
+
+
 def test_a_record_refused_for_another_reason_still_raises():
     # two tones high in the band (persistently exciting of order 4 only): refused, and no
     # decimation helps (its band is most of the Nyquist band), so identify raises the

@@ -23,9 +23,11 @@ __all__ = ["BAND_SHARE", "MIN_KEPT", "POWER", "decimation_factor", "input_band",
 BAND_SHARE = 0.2
 #: the share of each input's power that its band holds
 POWER = 0.999
-#: fewest samples the shortest experiment keeps after decimation (a few hundred per
-#: held-out block)
-MIN_KEPT = 1000
+#: fewest samples the shortest experiment keeps after decimation (a hundred per held-out
+#: block of :func:`sysid.identify`). At 1 000, a record of 1 001 samples logged at twice the
+#: rate its input needs (a reaction-wheel pendulum's chirp, 0.09-0.7 Hz at 20 Hz) could not
+#: be decimated at all and identify refused it; decimated by 2 it validates at 67.6 %
+MIN_KEPT = 500
 
 
 def input_band(data: IOData) -> float:

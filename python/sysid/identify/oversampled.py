@@ -31,7 +31,7 @@ from typing import Any
 
 from ..data.iodata import IOData
 from ..data.oversampling import decimation_factor, input_band
-from ..errors import ExcitationError, NumericalError
+from ..errors import ExcitationError, InsufficientDataError, NumericalError
 
 __all__ = ["record_feedback", "retry_decimated"]
 
@@ -85,7 +85,7 @@ def retry_decimated(identify: Any) -> Any:
             token = _FEEDBACK.set(fb)
             try:
                 res = identify(decimate(rec, q), None, **kw)
-            except ExcitationError:
+            except (ExcitationError, InsufficientDataError):  # the copy is refused too
                 raise err from None
             finally:
                 _FEEDBACK.reset(token)
