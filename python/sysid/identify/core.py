@@ -360,7 +360,7 @@ def identify(
                 f"step inside the block)")
         if refine:
             _refined_candidates(board)
-            _stabilised_refinements(board)
+            _stabilised_refinements(board, centred)
             higher_orders(board, _refine, N_REFINE)
             if all(r["criterion"].startswith("subspace") for r in board.rows):
                 checks["refinement"] = (
