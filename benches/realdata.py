@@ -175,6 +175,11 @@ twenty-ninth sweep's records (a catchment, a micro gas turbine, a wastewater pla
 aeration, an MR damper, a walking robot's leg, a Li-ion cell, a Peltier cell, a pump, a
 research jet's pitch, an office's CO2, an anaesthetised patient); sources, SHA-256, how each
 ``.npz`` is made and the findings: results/realdata_fresh29.md.
+``--fresh30-records DIR`` (``FRESH30``, results/realdata_fresh30_table[_<split>].md): the
+thirtieth sweep's records (a camera gimbal's brushless motor, a district heating network, a
+brine-to-water heat pump on a bench, a pot of water under a PI loop, a person with type 1
+diabetes, an aquifer's well, a reaction-wheel pendulum, a gas-fired coffee roaster); sources,
+SHA-256, how each ``.npz`` is made and the findings: results/realdata_fresh30.md.
 
 Score: the simulation fit on the validation part, NRMSE %, ``100 (1 - |y - yhat| / |y -
 mean(y)|)`` averaged over outputs, with the initial state fitted by least squares on the
@@ -242,6 +247,7 @@ from realdata_records import (  # noqa: F401
     FRESH27,
     FRESH28,
     FRESH29,
+    FRESH30,
     MORE,
     SWEEPS,
 )

@@ -365,6 +365,34 @@ FRESH29 = {
     "propofol_bis": ("propofol_bis_vitaldb_all", None),
 }
 
+FRESH30 = {
+    # a one-axis camera gimbal's brushless motor driven open loop (a lab rig), 5 ms: field
+    # angle command (square wave) -> camera angle, gyro rate (a second run validates)
+    "gimbal_bldc_steps": ("gimbal_bldc_steps", "gimbal_bldc_steps_val"),
+    # a district heating network's branch (Pongau), 15 min, in operation: feed temperature,
+    # three substation flows, outdoor temperature -> three substation temperatures (2/3 : 1/3)
+    "dh_network_pongau": ("dh_network_pongau", None),
+    # a brine-to-water heat pump on a test bench (RWTH EBC), 1 s: compressor and pump
+    # statuses, water return and brine inlet temperatures -> water supply temperature,
+    # electrical power, brine outlet temperature (2/3 : 1/3; the last third is the shutdown)
+    "brine_hp_bench": ("brine_hp_bench", None),
+    # a pot of water on an electric hot plate under PI control, 10 s: power -> water and
+    # plate temperatures (a repeat run validates)
+    "cooking_pot_pi": ("cooking_pot_pi", "cooking_pot_pi_val"),
+    # one person with type 1 diabetes in free living, 5 min: insulin, carbohydrate ->
+    # interstitial glucose (2/3 : 1/3)
+    "t1d_glucose_insulin": ("t1d_glucose_insulin", None),
+    # an alluvial aquifer's well (Gossau), daily: precipitation, evaporation -> groundwater
+    # head (1998-2021 estimate, 1991-1996 validate)
+    "gossau_groundwater": ("gossau_groundwater", "gossau_groundwater_val"),
+    # a reaction-wheel pendulum hanging down (a student rig), 50 ms, open loop: motor command
+    # (a chirp) -> pendulum angle, wheel speed (a sine run validates)
+    "reaction_pendulum_chirp": ("reaction_pendulum_chirp", "reaction_pendulum_chirp_val"),
+    # an empty gas-fired coffee roaster's drum, 1 s, stepped by hand: burner, air flow ->
+    # exhaust and drum temperatures (2/3 : 1/3; the last part is the cool-down)
+    "coffee_roaster_gas_air": ("coffee_roaster_gas_air", None),
+}
+
 #: the sweeps read from ``DIR/<name>.npz``: ``--<sweep>-records DIR`` runs a table's records
 #: into ``results/<stem>[_<split>].md`` (the third sweep's tables beside its account,
 #: results/realdata_fresh3.md)
@@ -395,4 +423,5 @@ SWEEPS = {"more": ("MORE", "realdata_more"), "fresh": ("FRESH", "realdata_fresh"
           "fresh26": ("FRESH26", "realdata_fresh26_table"),
           "fresh27": ("FRESH27", "realdata_fresh27_table"),
           "fresh28": ("FRESH28", "realdata_fresh28_table"),
-          "fresh29": ("FRESH29", "realdata_fresh29_table")}
+          "fresh29": ("FRESH29", "realdata_fresh29_table"),
+          "fresh30": ("FRESH30", "realdata_fresh30_table")}
