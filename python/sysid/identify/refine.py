@@ -235,10 +235,12 @@ def _stabilised_refinements(board: Board, data: IOData | None = None) -> None:
         if (r["criterion"] == "subspace" and not r["stable"] and "stabilised" in r
                 and r["order"] not in done and r["order"] not in picks):
             picks[r["order"]] = r
+    if not picks:
+        return
     verdict = "none" if none_stable else board.unstable_verdict()
     if verdict == "drift" and data is not None and inputs_trend(data):
         verdict = "none"  # the drift may be the response to the input's trend
-    if not picks or verdict != "none":
+    if verdict != "none":
         return
     for n in sorted(picks)[:N_REFINE]:
         r = picks[n]
