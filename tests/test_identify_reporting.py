@@ -81,7 +81,7 @@ def test_a_search_that_refined_nothing_says_why(monkeypatch):
     # block, so no prediction-error search starts; the checks say so (the refinements from
     # a stable A, made when no candidate is stable, left out here as when each one fails)
     monkeypatch.setattr(importlib.import_module("sysid.identify.core"),
-                        "_stabilised_refinements", lambda board: None)
+                        "_stabilised_refinements", lambda board, data=None: None)
     rng = np.random.default_rng(0)
     true = sysid.StateSpaceModel([[1.0, 0.1], [0.0, 0.7]], [[0.0], [1.0]], [[1.0, 0.0]])
     u = rng.standard_normal(200)
