@@ -26,6 +26,7 @@ from .segments import _Exp, channel_index, unknown_names
 
 __all__ = [
     "find_spikes",
+    "line_share",
     "despike",
     "detrend",
     "scale",
@@ -208,8 +209,9 @@ def repair_isolated_spikes(data: IOData) -> tuple[IOData, dict[str, list[int]]]:
             hits = [int(t) for t in hits if int(t) not in (near or set())]
             if not hits:
                 continue
-            trial = x.copy()
-            trial[hits] = 0.5 * (x[np.array(hits) - 1] + x[np.array(hits) + 1])
+            mask = np.zeros((len(x), 1), dtype=bool)
+            mask[hits] = True
+            trial = _fill(x[:, None], mask)[:, 0]  # a lone sample: its neighbours' mean
             left = _spikes(trial)  # a spike still near one: not a single sample
             done = [t for t in hits if not np.any(np.abs(left - t) <= 3)]
             y[done, j] = trial[done]
@@ -281,6 +283,29 @@ def despike(
 # --------------------------------------------------------------------------------------------
 # trends and scaling
 # --------------------------------------------------------------------------------------------
+
+
+def line_share(x: Any) -> np.ndarray:
+    """Per column of ``x`` (samples x channels; 1-D: one channel), the share of its variation
+    that a straight line in time takes out (its R^2); 0 for a constant column or fewer than
+    three samples.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sysid.data.preprocessing import line_share
+    >>> np.round(line_share(np.c_[np.arange(10.0), np.ones(10)]), 12).tolist()
+    [1.0, 0.0]
+    """
+    x = np.asarray(x, dtype=float)
+    x = x.reshape(x.shape[0], -1)
+    if x.shape[0] < 3:
+        return np.zeros(x.shape[1])
+    t = np.linspace(-1.0, 1.0, x.shape[0])
+    c = x - x.mean(axis=0)
+    var = np.sum(c ** 2, axis=0)
+    line = (t @ c) ** 2 / (t @ t)  # the variation the least-squares line takes out
+    return np.where(var > 0, line / np.where(var > 0, var, 1.0), 0.0)
 
 
 def _basis(n: int, kind: str, breakpoints: Sequence[int]) -> np.ndarray:

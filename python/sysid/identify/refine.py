@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from ..data.iodata import IOData
+from ..data.preprocessing import line_share
 from ..models.statespace import ss_parameter_count
 from ..validation.crossval import TOL, simulation_fit
 from .board import Board
@@ -20,7 +21,7 @@ from .delay import within_delay
 from .sweep import SUBSPACE
 
 __all__ = ["FINAL_ITER", "FINAL_WORK", "FOLD_WORK", "NOMINAL_ITER", "N_REFINE", "REFINE_WORK",
-           "SETTLE_POINTS", "SETTLE_WINDOW", "TREND_SHARE", "implied_fit", "inputs_trend",
+           "SETTLE_POINTS", "SETTLE_WINDOW", "INPUT_TREND_SHARE", "implied_fit", "inputs_trend",
            "iteration_work", "settled"]
 
 #: subspace candidates (distinct order and feedthrough) refined by prediction-error search
@@ -166,14 +167,15 @@ def _refine(board: Board, r: dict[str, Any], focus: str, criterion: str) -> None
 
 #: an input trends when a straight line over its experiment takes out at least this share
 #: of its variation (a heater at full power for most of the record, then held low: 61 %)
-TREND_SHARE = 0.25
+INPUT_TREND_SHARE = 0.25
 
 
 def inputs_trend(data: IOData) -> bool:
     """Whether some input of ``data`` trends: in some experiment, a straight line over it
-    takes out at least :data:`TREND_SHARE` of the input's variation. The output's response
-    to such an input trends too, and a record's "drift" (:meth:`.board.Board.unstable_verdict`,
-    tested with a line taken out of every channel) may then be the plant's response.
+    takes out at least :data:`INPUT_TREND_SHARE` of the input's variation
+    (:func:`sysid.data.preprocessing.line_share`). The output's response to such an input
+    trends too, and a record's "drift" (:meth:`.board.Board.unstable_verdict`, tested with a
+    line taken out of every channel) may then be the plant's response.
 
     Examples
     --------
@@ -186,17 +188,7 @@ def inputs_trend(data: IOData) -> bool:
     >>> inputs_trend(sysid.IOData(u=prbs, y=np.zeros(500)))
     False
     """
-    for u, _ in data.experiments:
-        u = np.asarray(u, float).reshape(len(u), -1)
-        if len(u) < 3:
-            continue
-        t = np.linspace(-1.0, 1.0, len(u))
-        c = u - u.mean(axis=0)
-        var = np.sum(c ** 2, axis=0)
-        line = (t @ c) ** 2 / (t @ t)  # the variation the least-squares line takes out
-        if np.any((var > 0) & (line >= TREND_SHARE * var)):
-            return True
-    return False
+    return any(bool(np.any(line_share(u) >= INPUT_TREND_SHARE)) for u, _ in data.experiments)
 
 
 def _stabilised_refinements(board: Board, data: IOData | None = None) -> None:

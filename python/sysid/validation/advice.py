@@ -27,6 +27,7 @@ import numpy as np
 from .._display import HTMLResult, pvalue
 from .._threads import one_blas_thread
 from ..data.iodata import require_record
+from ..data.preprocessing import line_share
 from ..errors import DataError, InsufficientDataError
 
 __all__ = ["Advice", "Finding", "advice"]
@@ -128,14 +129,7 @@ def _offsets(data: Any) -> Finding:
 def _trends(data: Any) -> Finding:
     shares = []
     for j, name in enumerate(data.output_names):
-        r2 = []
-        for e in data.experiments:
-            y = e[1][:, j]
-            if y.size < 3 or y.std() == 0:
-                continue
-            t = np.arange(y.size, dtype=float)
-            c = np.polyfit(t, y, 1)
-            r2.append(1 - np.var(y - np.polyval(c, t)) / np.var(y))
+        r2 = [float(line_share(e[1][:, j])[0]) for e in data.experiments]
         if r2 and max(r2) > TREND_SHARE:
             shares.append(f"{name} ({100 * max(r2):.0f} %)")
     if shares:
