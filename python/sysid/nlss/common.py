@@ -12,6 +12,7 @@ import numpy as np
 from ..data.iodata import IOData
 from ..errors import (
     DataError,
+    ExcitationError,
     InsufficientDataError,
     IterationLimitWarning,
     OrderError,
@@ -189,6 +190,8 @@ def linear_start(data: IOData, sd: IOData, sc: Scaling, order: int, init: Any,
             with feedback_checked():  # a nonlinear model's start (see nlhw)
                 return sysid.ssest(sd, order, focus="simulation", feedthrough=False,
                                    progress=False, **kw)
+        except ExcitationError as e:
+            raise _oversampled(e, data) from None
         except (OrderError, InsufficientDataError) as e:
             # a record too short for the order, in the nonlinear fit's words (the subspace
             # start's horizons are not the user's settings), its own after
@@ -197,6 +200,22 @@ def linear_start(data: IOData, sd: IOData, sc: Scaling, order: int, init: Any,
                           f"start of order {order} (a subspace fit refined by ssest): give a "
                           f"longer record or a lower order, or a linear start (init=); the "
                           f"subspace fit said: {e}") from e
+
+
+def _oversampled(err: ExcitationError, data: IOData) -> ExcitationError:
+    """The linear start's refusal of a record as not persistently exciting, with the
+    decimation that helps when the user's whole record (``data``) is oversampled: the start
+    sees only the training part, often too short for the subspace estimators' own note (a
+    reaction-wheel pendulum's chirp of 1 001 samples, twice oversampled: decimated by 2, both
+    nonlinear fits run); ``err`` itself otherwise, or when it names the decimation already."""
+    from ..data.oversampling import oversampled_note
+
+    note = None if "sysid.decimate" in str(err) else oversampled_note(data)
+    if note is None or not err.problem:
+        return err
+    said = ExcitationError(f"{err.problem}: {note}")
+    said.kind, said.problem, said.remedy = err.kind, err.problem, note
+    return said
 
 
 def linear_states(m: StateSpaceModel, us: list[np.ndarray]) -> list[np.ndarray]:
