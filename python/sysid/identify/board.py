@@ -472,10 +472,12 @@ class Board:
 
     def eligible(self, r: dict[str, Any], stable_only: bool = True) -> bool:
         """Whether ``r`` can be chosen: scored, not below its start, not only a start (a
-        subspace fit with a stable ``A`` enforced, refined from), and stable unless
+        subspace fit with a stable ``A`` enforced, refined from), of an order the input's
+        excitation determines (:func:`~sysid.identify.notes.undetermined_orders`), and
+        stable unless
         ``stable_only`` is off (and the data insisted on it, when they were asked)."""
         return (bool(np.isfinite(r["held_out_fit"])) and not r.get("worse_than_start")
-                and not r.get("start_only")
+                and not r.get("start_only") and not r.get("undetermined")
                 and (r["stable"] or not (stable_only or r.get("not_insisted"))))
 
     def rising(self, top: int) -> set[tuple[str, bool]]:

@@ -190,7 +190,8 @@ def rechoose_on_whole_record(board: Board, data: IOData, model: Any, chosen: dic
     floor = chosen["held_out_fit"] - LONG_GAP
     pool = sorted((r for r in board.rows if r is not chosen and r["stable"]
                    and np.isfinite(r["held_out_fit"]) and r["held_out_fit"] >= floor
-                   and not r.get("start_only") and "error" not in r),
+                   and not r.get("start_only") and not r.get("undetermined")
+                   and "error" not in r),
                   key=lambda r: -r["held_out_fit"])[:N_FINAL]
     try:
         own = chosen["bic"] if "bic" in chosen else bic(model, data)

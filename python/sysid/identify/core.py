@@ -111,6 +111,7 @@ from .notes import (
     excitation_check,
     loop_checks,
     order_excitation_check,
+    undetermined_orders,
     persistent_mode_check,
     refit_cap_check,
     trend_check,
@@ -407,6 +408,8 @@ def identify(
         warnings.warn(f"identify stopped scoring candidates after time_budget={time_budget} s "
                       f"({len(board.rows)} scored): the best so far is returned; raise "
                       "time_budget for the full search", SysidWarning, stacklevel=user_stacklevel())
+    if (note := undetermined_orders(board, centred, counted)) is not None:
+        checks["order_excitation_choice"] = note
     insist = board.insisting() if enforce_stability is None else None
     if board.drift is not None:
         u = board.drift["unstable"]
