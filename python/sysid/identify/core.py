@@ -111,10 +111,10 @@ from .notes import (
     excitation_check,
     loop_checks,
     order_excitation_check,
-    undetermined_orders,
     persistent_mode_check,
     refit_cap_check,
     trend_check,
+    undetermined_orders,
     weak_check,
     whole_record_check,
 )
