@@ -59,7 +59,9 @@
    candidates
    only when the data insist (:meth:`.board.Board.insisting`) or ``enforce_stability=False``.
    An unstable candidate that wins only while the record's drift is left in is not one
-   the data insist on (``checks["drift"]`` says so).
+   the data insist on (``checks["drift"]`` says so). An order the input's excitation does
+   not determine (``2 n`` above its spectral count) is set aside when a determined one can be
+   chosen, unless the blocks insist on it (:func:`.notes.undetermined_orders`).
    ``validation`` data, when given, are only reported on.
 5. The chosen model's simulation errors on the record are checked for a drift the input does
    not explain (:mod:`.notes`, ``checks["trend"]``), its held-out fit for a model
