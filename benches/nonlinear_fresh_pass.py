@@ -86,10 +86,12 @@ def main() -> None:
                        "l": est.n_outputs, "order": n}
                 for label in models:
                     m, err, said, s = _run(lambda f=calls[label], e=est: f(e))
-                    choice = None if m is None or label != "pnlss" else \
-                        m.info.get("degree_choice", {}).get("reason")
+                    dc = {} if m is None or label != "pnlss" else m.info.get("degree_choice", {})
                     row[label] = {"fit": _fit(m, val), "s": s, "err": err, "w": said,
-                                  "choice": choice}
+                                  "choice": dc.get("reason"),
+                                  # the held-out table and each candidate's per-block fits
+                                  "table": {str(k): v for k, v in dc.get("table", {}).items()},
+                                  "folds": {str(k): v for k, v in dc.get("folds", {}).items()}}
                 print(json.dumps(row), file=out, flush=True)
                 print(name, {k: (row[k]["fit"], row[k]["s"]) for k in models}, flush=True)
 

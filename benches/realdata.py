@@ -180,6 +180,11 @@ thirtieth sweep's records (a camera gimbal's brushless motor, a district heating
 brine-to-water heat pump on a bench, a pot of water under a PI loop, a person with type 1
 diabetes, an aquifer's well, a reaction-wheel pendulum, a gas-fired coffee roaster); sources,
 SHA-256, how each ``.npz`` is made and the findings: results/realdata_fresh30.md.
+``--fresh31-records DIR`` (``FRESH31``, results/realdata_fresh31_table[_<split>].md): the
+thirty-first sweep's records (a BMW i3's cabin heating, electric drive and traction battery,
+a microgrid's battery bank, a mock circulatory loop, a ventilated patient, a fed-batch
+fermenter, a servo swinging a pendulum, a fatigue-test rig, a heated incubator); sources,
+SHA-256, how each ``.npz`` is made and the findings: results/realdata_fresh31.md.
 
 Score: the simulation fit on the validation part, NRMSE %, ``100 (1 - |y - yhat| / |y -
 mean(y)|)`` averaged over outputs, with the initial state fitted by least squares on the
@@ -248,6 +253,7 @@ from realdata_records import (  # noqa: F401
     FRESH28,
     FRESH29,
     FRESH30,
+    FRESH31,
     MORE,
     SWEEPS,
 )

@@ -393,6 +393,41 @@ FRESH30 = {
     "coffee_roaster_gas_air": ("coffee_roaster_gas_air", None),
 }
 
+FRESH31 = {
+    # a BMW i3's cabin heating in winter driving (TU Munich data set), 0.1 s, closed loop
+    # (automatic climate control): heater power, ambient temperature -> coolant temperature
+    # at the heater core, cabin temperature (trip B03 estimates, trip B27 validates)
+    "bmw_i3_cabin_heater": ("bmw_i3_cabin_heater", "bmw_i3_cabin_heater_val"),
+    # the same car's electric drive, 0.1 s, driven in traffic: accelerator pedal -> motor
+    # torque, longitudinal acceleration (trip B03 estimates, trip B27 validates)
+    "bmw_i3_pedal_accel": ("bmw_i3_pedal_accel", "bmw_i3_pedal_accel_val"),
+    # the same car's high-voltage battery in summer driving, 0.1 s: current -> voltage (trip
+    # A12 estimates, trip A05 validates)
+    "bmw_i3_hv_battery": ("bmw_i3_hv_battery", "bmw_i3_hv_battery_val"),
+    # an off-grid microgrid's 48 V battery bank (NPS rooftop), 1 min, the inverter-charger
+    # in the loop: current -> voltage (2/3 : 1/3)
+    "spanagel_battery": ("spanagel_battery", None),
+    # the FDA mock circulatory loop, 1 ms, beats at 75/min with ventilation-like stroke
+    # modulation: aortic flow -> aortic and radial pressures (a second run validates)
+    "mcl_aortic_flow_rr12": ("mcl_aortic_flow_rr12", "mcl_aortic_flow_rr12_val"),
+    # a ventilated ICU patient (pressure-targeted PB-840), 20 ms, 1 000 breaths: airway
+    # pressure -> flow (2/3 : 1/3; the patient's own effort unmeasured)
+    "icu_vent_pb840": ("icu_vent_pb840", None),
+    # a fed-batch fermentation of C. glutamicum, 1 min: glucose feed, stirrer, air feed ->
+    # dissolved O2, off-gas CO2 and O2 (2/3 : 1/3; the stirrer in the DO loop)
+    "cglut_fedbatch": ("cglut_fedbatch", None),
+    # a Dynamixel XL330 servo swinging a pendulum under its own P loop, 5 ms: goal position ->
+    # arm angle (a sine run estimates, a chirp run validates)
+    "xl330_pendulum": ("xl330_pendulum", "xl330_pendulum_val"),
+    # the NRC FASTER fatigue rig, 7.75 ms, force-controlled (closed loop): actuator command
+    # -> force, beam displacement (the authors' halves)
+    "faster_beam_force": ("faster_beam_force", "faster_beam_force_val"),
+    # a heated incubator box (Aarhus digital-twin case), 3 s, random heater pulses, open
+    # loop: heater on/off, room temperature -> two in-box temperatures (a second run
+    # validates)
+    "incubator_box": ("incubator_box", "incubator_box_val"),
+}
+
 #: the sweeps read from ``DIR/<name>.npz``: ``--<sweep>-records DIR`` runs a table's records
 #: into ``results/<stem>[_<split>].md`` (the third sweep's tables beside its account,
 #: results/realdata_fresh3.md)
@@ -424,4 +459,5 @@ SWEEPS = {"more": ("MORE", "realdata_more"), "fresh": ("FRESH", "realdata_fresh"
           "fresh27": ("FRESH27", "realdata_fresh27_table"),
           "fresh28": ("FRESH28", "realdata_fresh28_table"),
           "fresh29": ("FRESH29", "realdata_fresh29_table"),
-          "fresh30": ("FRESH30", "realdata_fresh30_table")}
+          "fresh30": ("FRESH30", "realdata_fresh30_table"),
+          "fresh31": ("FRESH31", "realdata_fresh31_table")}
