@@ -55,6 +55,26 @@ class SysidError(Exception):
     #: what the core suggests, e.g. a richer input or a shorter horizon (None: nothing apart)
     remedy: str | None = None
 
+    def with_remedy(self, remedy: str) -> SysidError:
+        """The same error of the core, its remedy replaced by ``remedy`` (the core's advice in
+        the record's terms: a step test's, an oversampled record's decimation); the error
+        itself when it has no problem apart (raised in Python).
+
+        Examples
+        --------
+        >>> import sysid
+        >>> e = sysid.ExcitationError("not exciting; use a richer input")
+        >>> e.problem, e.kind = "not exciting", "NotPersistentlyExciting"
+        >>> said = e.with_remedy("decimate the record first")
+        >>> str(said), said.kind
+        ('not exciting: decimate the record first', 'NotPersistentlyExciting')
+        """
+        if not self.problem:
+            return self
+        said = type(self)(f"{self.problem}: {remedy}")
+        said.kind, said.problem, said.remedy = self.kind, self.problem, remedy
+        return said
+
 
 class DataError(SysidError, ValueError):
     """The data or an argument is unusable as given; the message says how to fix it."""

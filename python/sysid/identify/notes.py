@@ -88,6 +88,14 @@ def excitation_check(data: IOData) -> tuple[str, int | None]:
                f"{order(excitation_count(data, rest))}" if rest else "")), None
 
 
+def _counted_to(data: IOData, counted: int, need: int) -> int:
+    """The spectral count ``counted``, counted again up to ``need`` when it stopped at its
+    cap below that."""
+    if counted == EXCITATION_CAP < need:
+        return excitation_count(data, list(range(data.n_inputs)), need)
+    return counted
+
+
 def order_excitation_check(order: int, data: IOData, checks: dict[str, Any],
                            counted: int | None) -> None:
     """``checks["order_excitation"]`` and an :class:`~sysid.ExcitationWarning` when the chosen
@@ -116,9 +124,7 @@ def order_excitation_check(order: int, data: IOData, checks: dict[str, Any],
 
     if counted is None or data.n_inputs == 0:
         return
-    got = counted
-    if got == EXCITATION_CAP < 2 * order:  # the count stopped at its cap: count further
-        got = excitation_count(data, list(range(data.n_inputs)), 2 * order)
+    got = _counted_to(data, counted, 2 * order)
     if got >= 2 * order:
         return
     checks["order_excitation"] = (
@@ -167,10 +173,7 @@ def undetermined_orders(board: Any, data: IOData, counted: int | None) -> str | 
     """
     if counted is None or data.n_inputs == 0:
         return None
-    got = counted
-    top = max((r["order"] for r in board.rows), default=0)
-    if got == EXCITATION_CAP < 2 * top:  # the count stopped at its cap: count further
-        got = excitation_count(data, list(range(data.n_inputs)), 2 * top)
+    got = _counted_to(data, counted, 2 * max((r["order"] for r in board.rows), default=0))
     keep = got // 2
     # (eligible before the flag: scored, not below its start, stable)
     fine = [r for r in board.rows if r["order"] <= keep and board.eligible(r)]

@@ -17,6 +17,7 @@ from ..errors import (
     IterationLimitWarning,
     OrderError,
     StabilityWarning,
+    SysidError,
 )
 from ..models.statespace import StateSpaceModel
 from ..validation.output_error import feedback_checked
@@ -202,7 +203,7 @@ def linear_start(data: IOData, sd: IOData, sc: Scaling, order: int, init: Any,
                           f"subspace fit said: {e}") from e
 
 
-def _oversampled(err: ExcitationError, data: IOData) -> ExcitationError:
+def _oversampled(err: ExcitationError, data: IOData) -> SysidError:
     """The linear start's refusal of a record as not persistently exciting, with the
     decimation that helps when the user's whole record (``data``) is oversampled: the start
     sees only the training part, often too short for the subspace estimators' own note (a
@@ -211,11 +212,7 @@ def _oversampled(err: ExcitationError, data: IOData) -> ExcitationError:
     from ..data.oversampling import oversampled_note
 
     note = None if "sysid.decimate" in str(err) else oversampled_note(data)
-    if note is None or not err.problem:
-        return err
-    said = ExcitationError(f"{err.problem}: {note}")
-    said.kind, said.problem, said.remedy = err.kind, err.problem, note
-    return said
+    return err if note is None else err.with_remedy(note)
 
 
 def linear_states(m: StateSpaceModel, us: list[np.ndarray]) -> list[np.ndarray]:

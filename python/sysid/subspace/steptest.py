@@ -123,9 +123,7 @@ def refuse_step_test(err: ExcitationError, experiments: list[Any], past: int) ->
     note = step_test_note(experiments, past) or oversampled_note(
         IOData(u=[e[0] for e in experiments], y=[e[1] for e in experiments]))
     if note and err.problem:  # the core's remedy in the record's terms
-        said = ExcitationError(f"{err.problem}: {note}")
-        said.kind, said.problem, said.remedy = err.kind, err.problem, note
-        raise said from None
+        raise err.with_remedy(note) from None
     raise err
 
 
